@@ -1,0 +1,27 @@
+"""Run every benchmark module that exists and write its JSON under out/bench/."""
+import importlib
+import json
+import pkgutil
+import sys
+from pathlib import Path
+
+OUT = Path(__file__).resolve().parents[1] / 'out' / 'bench'
+
+
+def main() -> int:
+    OUT.mkdir(parents=True, exist_ok=True)
+    names = [m.name for m in pkgutil.iter_modules([str(Path(__file__).parent)]) if m.name.startswith('bench_')]
+    if not names:
+        print('bench: no benchmarks yet')
+        return 0
+    for name in sorted(names):
+        module = importlib.import_module(f'bench.{name}')
+        result = module.run()
+        path = OUT / f'{name.removeprefix("bench_")}.json'
+        path.write_text(json.dumps(result, indent=2))
+        print(f'bench: wrote {path}')
+    return 0
+
+
+if __name__ == '__main__':
+    sys.exit(main())

@@ -1,0 +1,51 @@
+"""Test-process set-up shared by every suite.
+
+Each pytest process takes its own ROS_DOMAIN_ID (held by a file lock for the life of the process)
+so that two test runs on one machine never see each other, keeps DDS discovery on localhost and
+writes ROS logs into a temporary directory.
+"""
+from __future__ import annotations
+
+import fcntl
+import os
+import sys
+import tempfile
+from pathlib import Path
+
+_DOMAIN_LOCK_DIR = Path(tempfile.gettempdir()) / 'ur_sim_driver_test_domains'
+_held_lock = None  # keeps the lock file open (and the domain reserved) until the process exits
+
+
+def _reserve_domain_id() -> int:
+    """Take the lowest free domain id in 1..101 that no other test process holds."""
+    global _held_lock
+    _DOMAIN_LOCK_DIR.mkdir(parents=True, exist_ok=True)
+    # Start from the pid so that concurrent processes rarely contend for the same file.
+    start = os.getpid() % 101
+    for k in range(101):
+        domain = 1 + (start + k) % 101
+        f = open(_DOMAIN_LOCK_DIR / f'{domain}.lock', 'w')
+        try:
+            fcntl.flock(f, fcntl.LOCK_EX | fcntl.LOCK_NB)
+        except OSError:
+            f.close()
+            continue
+        _held_lock = f
+        return domain
+    raise RuntimeError(f'no free ROS_DOMAIN_ID in 1..101 under {_DOMAIN_LOCK_DIR}')
+
+
+def pytest_configure(config) -> None:
+    if 'UR_SIM_TEST_DOMAIN_ID' not in os.environ:
+        os.environ['UR_SIM_TEST_DOMAIN_ID'] = str(_reserve_domain_id())
+    os.environ['ROS_DOMAIN_ID'] = os.environ['UR_SIM_TEST_DOMAIN_ID']
+    os.environ['ROS_AUTOMATIC_DISCOVERY_RANGE'] = 'LOCALHOST'
+    log_dir = Path(tempfile.mkdtemp(prefix='ur_sim_driver_roslog_'))
+    os.environ['ROS_LOG_DIR'] = str(log_dir)
+    os.environ.setdefault('MUJOCO_GL', 'egl')
+    # Helpers shared by the suites live beside this file.
+    sys.path.insert(0, str(Path(__file__).resolve().parent))
+
+
+def pytest_report_header(config) -> str:
+    return f"ROS_DOMAIN_ID={os.environ.get('ROS_DOMAIN_ID')} ROS_LOG_DIR={os.environ.get('ROS_LOG_DIR')}"

@@ -1,0 +1,1 @@
+"""ur_glue_planner: windshield glue path planning and execution through FollowJointTrajectory."""
