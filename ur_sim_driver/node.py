@@ -1,11 +1,337 @@
-"""The `ur_sim` node (placeholder until the simulator lands)."""
+"""The `ur_sim` node: a MuJoCo-simulated UR arm behind the UR ROS 2 driver's interfaces.
+
+Threads: the simulation loop runs in its own thread (paced to the wall clock, or as fast as possible) and
+publishes every control cycle; ROS callbacks (goals, cancels, topic commands, speed scaling) run in the
+executor and hand work to the loop under one lock. All times on the interfaces are simulated time, which
+the node publishes on /clock.
+"""
+from __future__ import annotations
+
 import sys
+import threading
+import time
+
+import numpy as np
+import rclpy
+from control_msgs.action import FollowJointTrajectory
+from control_msgs.msg import JointTrajectoryControllerState, SpeedScalingFactor
+from geometry_msgs.msg import PoseStamped
+from rclpy.action import ActionServer, CancelResponse, GoalResponse
+from rclpy.callback_groups import MutuallyExclusiveCallbackGroup, ReentrantCallbackGroup
+from rclpy.executors import ExternalShutdownException, MultiThreadedExecutor
+from rclpy.node import Node
+from rclpy.qos import DurabilityPolicy, QoSProfile
+from rosgraph_msgs.msg import Clock
+from sensor_msgs.msg import JointState
+from std_msgs.msg import Float64, String
+from trajectory_msgs.msg import JointTrajectory
+
+from ur_sim_driver import conversions as conv
+from ur_sim_driver import result_codes
+from ur_sim_driver.errors import UrSimError
+from ur_sim_driver.jtc import Outcome, TrajectoryController
+from ur_sim_driver.sim_config import SimConfig, sim_config_from_params
+from ur_sim_driver.simulator import Simulator
+from ur_sim_driver.tolerances import default_tolerances, resolve_tolerances
+from ur_sim_driver.validation import map_to_config_order, validate_trajectory
+
+_CATCH_UP_LIMIT = 0.1  # [s] of wall time the real-time loop may fall behind before it stops catching up
+
+
+class _GoalWaiter:
+    """Hands an action goal's outcome from the simulation loop to the goal's execute thread."""
+
+    def __init__(self) -> None:
+        self.event = threading.Event()
+        self.outcome: Outcome | None = None
+
+    def finish(self, outcome: Outcome) -> None:
+        self.outcome = outcome
+        self.event.set()
+
+
+class UrSimNode(Node):
+    """Simulated UR arm with the UR driver's topics and FollowJointTrajectory action.
+
+    Args:
+        context: rclpy context (the global one when None).
+        parameter_overrides: parameters as if given with --ros-args -p (tests use this).
+        start: start the simulation loop thread immediately.
+    """
+
+    def __init__(self, *, context=None, parameter_overrides=None, start: bool = True) -> None:
+        super().__init__('ur_sim', context=context, parameter_overrides=parameter_overrides or [],
+                         allow_undeclared_parameters=True,
+                         automatically_declare_parameters_from_overrides=True)
+        self.cfg: SimConfig = sim_config_from_params(
+            {name: p.value for name, p in self._parameters.items() if name != 'use_sim_time'})
+        self._warn_unknown_parameters()
+        self.sim = Simulator(self.cfg)
+        n = len(self.cfg.joints)
+        self._defaults = default_tolerances(
+            self.cfg.joints, trajectory=[c.trajectory for c in self.cfg.constraints],
+            goal=[c.goal for c in self.cfg.constraints], stopped_velocity=self.cfg.stopped_velocity_tolerance,
+            goal_time=self.cfg.goal_time)
+        self.jtc = TrajectoryController(self.cfg.joints, self._defaults, self.sim.state().q,
+                                        self.cfg.speed_scaling_initial_factor)
+        self._lock = threading.Lock()
+        self._waiters: dict[bytes, _GoalWaiter] = {}  # by goal id
+        self._goal_handles: dict[bytes, object] = {}
+        self._stop = threading.Event()
+        self._feedback_every = max(1, round(self.sim.control_rate / self.cfg.action_monitor_rate))
+        self._cycle = 0
+        self._last_tau = np.zeros(n)
+
+        p = self.cfg.prefixed
+        ctrl = self.cfg.controller_name
+        self._pub_js = self.create_publisher(JointState, p('joint_states'), 10)
+        self._pub_state = self.create_publisher(JointTrajectoryControllerState, p(f'{ctrl}/controller_state'), 10)
+        self._pub_scaling = self.create_publisher(Float64, p('speed_scaling_state_broadcaster/speed_scaling'), 10)
+        self._pub_tcp = self.create_publisher(PoseStamped, p('tcp_pose_broadcaster/pose'), 10)
+        self._pub_clock = self.create_publisher(Clock, '/clock', 10)
+        latched = QoSProfile(depth=1, durability=DurabilityPolicy.TRANSIENT_LOCAL)
+        self._pub_description = self.create_publisher(String, p('robot_description'), latched)
+        self._pub_description.publish(String(data=self.sim.urdf))
+
+        commands = MutuallyExclusiveCallbackGroup()
+        self.create_subscription(JointTrajectory, p(f'{ctrl}/joint_trajectory'), self._on_topic_trajectory, 10,
+                                 callback_group=commands)
+        self.create_subscription(SpeedScalingFactor, p(f'{ctrl}/speed_scaling_input'), self._on_speed_scaling,
+                                 10, callback_group=commands)
+        self._action = ActionServer(
+            self, FollowJointTrajectory, p(f'{ctrl}/follow_joint_trajectory'),
+            execute_callback=self._execute, goal_callback=self._on_goal, cancel_callback=self._on_cancel,
+            callback_group=ReentrantCallbackGroup())
+
+        self._init_messages()
+        self._thread = threading.Thread(target=self._run, name='ur_sim_loop', daemon=True)
+        if start:
+            self._thread.start()
+        mode = 'as fast as possible' if self.cfg.real_time_factor == 0 else f'RTF {self.cfg.real_time_factor}'
+        self.get_logger().info(
+            f'{self.cfg.ur_type} simulated at {self.sim.control_rate:.0f} Hz control '
+            f'({self.sim.physics.substeps} physics substeps), {mode}; action '
+            f'{p(f"{ctrl}/follow_joint_trajectory")}')
+
+    # ---- set-up ----------------------------------------------------------------------------------
+    def _warn_unknown_parameters(self) -> None:
+        known = set(SimConfig.__dataclass_fields__) | {'use_sim_time', 'start_type_description_service'}
+        for name in self._parameters:
+            if name.split('.')[0] not in known and not name.startswith('constraints.'):
+                self.get_logger().warning(f"parameter '{name}' is not used by ur_sim; valid names: "
+                                          f"{', '.join(sorted(known - {'constraints'}))}, constraints.*")
+
+    def _init_messages(self) -> None:
+        joints = list(self.sim.joint_names)
+        self._js = JointState(name=joints)
+        self._state_msg = JointTrajectoryControllerState(joint_names=joints)
+        self._scaling_msg = Float64()
+        self._clock_msg = Clock()
+        self._tcp_msg = PoseStamped()
+        self._tcp_msg.header.frame_id = f'{self.cfg.tf_prefix}base'
+
+    # ---- ROS callbacks (executor threads) ----------------------------------------------------------
+    def _validate(self, msg: JointTrajectory) -> str | None:
+        return validate_trajectory(
+            conv.trajectory_command(msg), joint_names_config=self.cfg.joints, q_min=self.sim.params.q_min,
+            q_max=self.sim.params.q_max, now=self.sim.time,
+            allow_partial=self.cfg.allow_partial_joints_goal,
+            allow_nonzero_end_velocity=self.cfg.allow_nonzero_velocity_at_trajectory_end)
+
+    def _on_goal(self, goal: FollowJointTrajectory.Goal) -> GoalResponse:
+        reason = self._validate(goal.trajectory)
+        if reason is None and goal.multi_dof_trajectory.points:
+            reason = 'multi_dof_trajectory is not supported by this controller (it has no multi-DOF joints)'
+        if reason is not None:
+            self.get_logger().error(f'Rejected FollowJointTrajectory goal: {reason}')
+            return GoalResponse.REJECT
+        return GoalResponse.ACCEPT
+
+    def _on_cancel(self, goal_handle) -> CancelResponse:
+        return CancelResponse.ACCEPT
+
+    def _on_topic_trajectory(self, msg: JointTrajectory) -> None:
+        reason = self._validate(msg)
+        if reason is not None:
+            self.get_logger().error(f'Dropped JointTrajectory message: {reason}')
+            return
+        with self._lock:
+            state = self.sim.state()
+            points = map_to_config_order(conv.trajectory_command(msg), self.cfg.joints, self._hold_reference())
+            preempted = self.jtc.start(points, state.t, state.q, state.qd)
+        if preempted is not None:
+            self._finish(preempted)
+
+    def _on_speed_scaling(self, msg: SpeedScalingFactor) -> None:
+        f = msg.factor
+        if not (0.0 <= f <= 1.0):
+            self.get_logger().error(f'Ignored speed_scaling_input: factor = {f} is outside [0.0, 1.0]; '
+                                    f'keeping {self.jtc.speed_scaling}')
+            return
+        with self._lock:
+            self.jtc.speed_scaling = float(f)
+
+    def _hold_reference(self) -> np.ndarray:
+        # Joints a partial goal leaves out keep their current command (upstream), else the measured position.
+        sample = self.jtc.last_sample
+        return sample.positions.copy() if sample is not None else self.sim.state().q
+
+    def _execute(self, goal_handle) -> FollowJointTrajectory.Result:
+        goal = goal_handle.request
+        waiter = _GoalWaiter()
+        tolerances, reason = resolve_tolerances(
+            self._defaults, self.cfg.joints, conv.tolerance_specs(goal.path_tolerance),
+            conv.tolerance_specs(goal.goal_tolerance), conv.duration_to_sec(goal.goal_time_tolerance))
+        if reason is not None:
+            self.get_logger().error(f'Goal tolerances ignored, using the defaults: {reason}')
+        token = bytes(goal_handle.goal_id.uuid)
+        with self._lock:
+            state = self.sim.state()
+            points = map_to_config_order(conv.trajectory_command(goal.trajectory), self.cfg.joints,
+                                         self._hold_reference())
+            self._waiters[token] = waiter
+            self._goal_handles[token] = goal_handle
+            preempted = self.jtc.start(points, state.t, state.q, state.qd, token=token, tolerances=tolerances)
+        if preempted is not None:
+            self._finish(preempted)
+        while not waiter.event.wait(0.005):
+            if goal_handle.is_cancel_requested:
+                with self._lock:
+                    if self.jtc.cancel(token, self.sim.state().q):
+                        self._waiters.pop(token, None)
+                        self._goal_handles.pop(token, None)
+                        goal_handle.canceled()
+                        self.get_logger().info('Goal canceled; holding the measured position')
+                        return FollowJointTrajectory.Result(error_code=result_codes.SUCCESSFUL,
+                                                            error_string='Goal canceled by the client.')
+            if self._stop.is_set() or not self.context.ok():
+                goal_handle.abort()
+                return FollowJointTrajectory.Result(error_code=result_codes.INVALID_GOAL,
+                                                    error_string='ur_sim is shutting down.')
+        outcome = waiter.outcome
+        result = FollowJointTrajectory.Result(error_code=outcome.code, error_string=outcome.message)
+        if outcome.code == result_codes.SUCCESSFUL:
+            goal_handle.succeed()
+        else:
+            self.get_logger().warning(f'Goal aborted ({result_codes.NAMES[outcome.code]}): {outcome.message}')
+            goal_handle.abort()
+        return result
+
+    def _finish(self, outcome: Outcome) -> None:
+        self._goal_handles.pop(outcome.token, None)
+        waiter = self._waiters.pop(outcome.token, None)
+        if waiter is not None:
+            waiter.finish(outcome)
+
+    # ---- simulation loop (own thread) ------------------------------------------------------------
+    def _run(self) -> None:
+        dt = self.sim.control_dt
+        rtf = self.cfg.real_time_factor
+        wall_period = dt / rtf if rtf > 0 else 0.0
+        next_wall = time.perf_counter()
+        try:
+            while not self._stop.is_set():
+                self.step_once()
+                if wall_period > 0.0:
+                    next_wall += wall_period
+                    delay = next_wall - time.perf_counter()
+                    if delay > 0.0:
+                        time.sleep(delay)
+                    elif delay < -_CATCH_UP_LIMIT:
+                        next_wall = time.perf_counter()
+                elif self._cycle % 8 == 0:
+                    time.sleep(0)  # let executor threads take the GIL in fast mode
+        except Exception as exc:  # the loop must never die silently
+            self.get_logger().fatal(f'simulation loop stopped: {exc!r}')
+            raise
+
+    def step_once(self) -> None:
+        """One control cycle: measure, update the JTC, apply torques, step physics, publish."""
+        with self._lock:
+            state = self.sim.state()
+            sample, outcome = self.jtc.update(state.t, self.sim.control_dt, state.q, state.qd)
+            tau = self.sim.advance(state, sample)
+            token = self.jtc.active_token
+            feedback_due = token is not None and self._cycle % self._feedback_every == 0
+            factor = self.jtc.speed_scaling
+        self._publish(state, sample, tau, factor)
+        if feedback_due:
+            self._publish_feedback(token, state, sample)
+        if outcome is not None:
+            self._finish(outcome)
+        self._cycle += 1
+
+    def _publish(self, state, sample, tau, factor) -> None:
+        stamp = conv.sec_to_time(state.t)
+        js = self._js
+        js.header.stamp = stamp
+        js.position = conv.float_array(state.q)
+        js.velocity = conv.float_array(state.qd)
+        js.effort = conv.float_array(state.effort)
+        self._pub_js.publish(js)
+        st = self._state_msg
+        st.header.stamp = stamp
+        conv.fill_point(st.reference, sample.positions, sample.velocities, sample.accelerations)
+        conv.fill_point(st.feedback, state.q, state.qd)
+        conv.fill_point(st.error, sample.positions - state.q, sample.velocities - state.qd)
+        conv.fill_point(st.output, sample.positions, sample.velocities, effort=tau)
+        st.speed_scaling_factor = factor
+        self._pub_state.publish(st)
+        self._scaling_msg.data = factor * 100.0
+        self._pub_scaling.publish(self._scaling_msg)
+        p, q = self.sim.tcp_pose()
+        pose = self._tcp_msg
+        pose.header.stamp = stamp
+        pose.pose.position.x, pose.pose.position.y, pose.pose.position.z = p.tolist()
+        o = pose.pose.orientation
+        o.x, o.y, o.z, o.w = q.tolist()
+        self._pub_tcp.publish(pose)
+        self._clock_msg.clock = stamp
+        self._pub_clock.publish(self._clock_msg)
+
+    def _publish_feedback(self, token, state, sample) -> None:
+        goal_handle = self._goal_handles.get(token)
+        if goal_handle is None:
+            return
+        fb = FollowJointTrajectory.Feedback()
+        fb.header.stamp = conv.sec_to_time(state.t)
+        fb.joint_names = list(self.sim.joint_names)
+        fb.desired = conv.trajectory_point(sample.positions, sample.velocities, sample.accelerations)
+        fb.actual = conv.trajectory_point(state.q, state.qd)
+        fb.error = conv.trajectory_point(sample.positions - state.q, sample.velocities - state.qd)
+        try:
+            goal_handle.publish_feedback(fb)
+        except Exception as exc:  # the goal may have ended in an executor thread meanwhile
+            self.get_logger().debug(f'feedback not published: {exc!r}')
+
+    def shutdown(self) -> None:
+        """Stop the simulation loop and wait for it."""
+        self._stop.set()
+        if self._thread.is_alive():
+            self._thread.join(timeout=5.0)
 
 
 def main(argv: list[str] | None = None) -> int:
-    """Entry point of `ur_sim`."""
-    print('ur_sim: not implemented yet (see the ur_sim issue); exiting.', file=sys.stderr)
-    return 0
+    """Entry point of `ur_sim` (and `ros2 run ur_sim_driver ur_sim`)."""
+    rclpy.init(args=argv)
+    node = None
+    code = 0
+    try:
+        node = UrSimNode()
+        executor = MultiThreadedExecutor(num_threads=8)
+        executor.add_node(node)
+        executor.spin()
+    except (KeyboardInterrupt, ExternalShutdownException):
+        pass
+    except UrSimError as exc:
+        print(f'ur_sim: {exc}', file=sys.stderr)
+        code = 2
+    finally:
+        if node is not None:
+            node.shutdown()
+            node.destroy_node()
+        rclpy.try_shutdown()
+    return code
 
 
 if __name__ == '__main__':

@@ -1,0 +1,177 @@
+"""The per-cycle logic of a scaled joint trajectory controller (JTC), without ROS.
+
+One instance owns the active trajectory and decides, every control cycle, the reference the low-level
+controller tracks and whether the active goal has ended. It reproduces ros2_controllers'
+joint_trajectory_controller as the UR driver configures it (``scaled_joint_trajectory_controller``):
+
+* trajectory time advances by ``period x speed scaling factor``; a factor of 0 pauses;
+* a new trajectory replaces the active one; an action goal that is replaced ends with INVALID_GOAL
+  "Current goal preempted by new incoming action." (upstream); replaced by a topic message it ends the
+  same way with its own message (upstream leaves such a goal running against the topic's trajectory,
+  which then reports on a motion it did not ask for; we end it instead, as a user expects);
+* while running, the path tolerance is checked for action goals; a violation aborts with
+  PATH_TOLERANCE_VIOLATED and holds the measured position;
+* after the last point, the goal tolerance (position, and velocity against
+  ``stopped_velocity_tolerance``) decides SUCCESSFUL, or GOAL_TOLERANCE_VIOLATED once ``goal_time`` has
+  passed (0 = wait without limit, as upstream); after success the last point is held;
+* cancel holds the measured position.
+"""
+from __future__ import annotations
+
+from collections.abc import Hashable
+from dataclasses import dataclass
+
+import numpy as np
+
+from ur_sim_driver import result_codes
+from ur_sim_driver.tolerances import check_goal, check_path, goal_outcome
+from ur_sim_driver.trajectory import Trajectory, TrajectorySample
+from ur_sim_driver.trajectory_types import SegmentTolerances, TrajectoryPoints
+
+PREEMPTED_BY_ACTION = 'Current goal preempted by new incoming action.'
+PREEMPTED_BY_TOPIC = 'Current goal preempted by a new trajectory on the joint_trajectory topic.'
+
+
+@dataclass(frozen=True)
+class Outcome:
+    """How an action goal ended.
+
+    Attributes:
+        token: the goal's token as given to :meth:`TrajectoryController.start`.
+        code: control_msgs FollowJointTrajectory result code.
+        message: error_string ('' on success).
+    """
+
+    token: Hashable
+    code: int
+    message: str
+
+
+class TrajectoryController:
+    """Reference generation and goal supervision, one call of :meth:`update` per control cycle.
+
+    Args:
+        joint_names: n controller joint names.
+        defaults: default tolerances (from the ``constraints`` parameters).
+        hold_positions: (n,) [rad] position held before any trajectory.
+        speed_scaling: initial factor in [0, 1].
+    """
+
+    def __init__(self, joint_names: tuple[str, ...], defaults: SegmentTolerances,
+                 hold_positions: np.ndarray, speed_scaling: float = 1.0) -> None:
+        self.joint_names = tuple(joint_names)
+        self.defaults = defaults
+        self.speed_scaling = float(speed_scaling)
+        self._hold = np.array(hold_positions, dtype=float)
+        self._trajectory: Trajectory | None = None
+        self._tolerances: SegmentTolerances | None = None
+        self._token: Hashable | None = None
+        self._traj_time = 0.0
+        self.last_sample: TrajectorySample | None = None
+
+    @property
+    def active_token(self) -> Hashable | None:
+        """Token of the action goal being executed, or None (idle, holding, or a topic trajectory)."""
+        return self._token
+
+    @property
+    def trajectory(self) -> Trajectory | None:
+        """The trajectory being executed, or None while holding."""
+        return self._trajectory
+
+    @property
+    def trajectory_time(self) -> float:
+        """Scaled trajectory time [s]: advances by period x speed scaling factor."""
+        return self._traj_time
+
+    def start(self, points: TrajectoryPoints, now: float, q: np.ndarray, qd: np.ndarray,
+              token: Hashable | None = None, tolerances: SegmentTolerances | None = None) -> Outcome | None:
+        """Replace the active trajectory.
+
+        Args:
+            points: validated trajectory in controller order.
+            now: current time [s].
+            q, qd: (n,) measured state [rad], [rad/s]; the first segment starts from it.
+            token: identifies an action goal; None for a topic message (no tolerance supervision).
+            tolerances: resolved tolerances of the goal (defaults when None).
+
+        Returns:
+            The outcome of the action goal this one preempts, if any.
+        """
+        preempted = None
+        if self._token is not None:
+            message = PREEMPTED_BY_ACTION if token is not None else PREEMPTED_BY_TOPIC
+            preempted = Outcome(self._token, result_codes.INVALID_GOAL, message)
+        self._traj_time = now
+        self._trajectory = Trajectory.start(points, now, q, qd)
+        self._tolerances = tolerances if tolerances is not None else self.defaults
+        self._token = token
+        return preempted
+
+    def cancel(self, token: Hashable, q: np.ndarray) -> bool:
+        """Cancel the action goal `token` if it is active and hold the measured position `q` (n,) [rad]."""
+        if token is None or token != self._token:
+            return False
+        self.hold(q)
+        return True
+
+    def hold(self, q: np.ndarray) -> None:
+        """Drop any trajectory (ending no goal) and hold position `q` (n,) [rad]."""
+        self._trajectory = None
+        self._token = None
+        self._hold = np.array(q, dtype=float)
+
+    def update(self, now: float, period: float, q: np.ndarray, qd: np.ndarray) -> tuple[TrajectorySample,
+                                                                                         Outcome | None]:
+        """Advance one control cycle.
+
+        Args:
+            now: time at the start of this cycle [s].
+            period: control period since the last cycle [s].
+            q, qd: (n,) measured state [rad], [rad/s].
+
+        Returns:
+            (reference, outcome): the reference to track now, and the outcome of the active goal if it
+            ended in this cycle.
+        """
+        outcome = None
+        traj = self._trajectory
+        if traj is None:
+            sample = self._hold_sample()
+        else:
+            self._traj_time += period * self.speed_scaling
+            sample = traj.sample(self._traj_time)
+            if self._token is not None:
+                outcome = self._supervise(sample, traj, q, qd)
+            if outcome is None and sample.ended and self._token is None:
+                # Topic trajectories (and finished goals) end by holding their last point.
+                self.hold(sample.positions)
+        self.last_sample = sample
+        return sample, outcome
+
+    def _supervise(self, sample: TrajectorySample, traj: Trajectory, q: np.ndarray,
+                   qd: np.ndarray) -> Outcome | None:
+        tol = self._tolerances
+        err_q = sample.positions - q
+        err_qd = sample.velocities - qd
+        token = self._token
+        if not sample.ended:
+            reason = check_path(err_q, err_qd, None, tol, self.joint_names)
+            if reason is None:
+                return None
+            self.hold(q)
+            return Outcome(token, result_codes.PATH_TOLERANCE_VIOLATED, reason)
+        # Past the end the goal state is the last point at rest: velocity is judged against 0.
+        reason = check_goal(err_q, -qd, None, tol, self.joint_names)
+        code = goal_outcome(self._traj_time - traj.end_time, reason, tol.goal_time)
+        if code is None:
+            return None
+        if code == result_codes.SUCCESSFUL:
+            self.hold(sample.positions)
+            return Outcome(token, code, '')
+        self.hold(q)
+        return Outcome(token, code, f'{reason} after goal_time {tol.goal_time:.3f} s')
+
+    def _hold_sample(self) -> TrajectorySample:
+        zero = np.zeros_like(self._hold)
+        return TrajectorySample(self._hold.copy(), zero, zero.copy(), 0, True)

@@ -1,0 +1,115 @@
+"""MuJoCo stepping of a UR arm: indices resolved once by name, torques in, joint state and TCP pose out."""
+from __future__ import annotations
+
+from dataclasses import dataclass
+
+import mujoco
+import numpy as np
+
+from ur_sim_driver.errors import ConfigError
+
+
+@dataclass(frozen=True, eq=False)
+class ArmState:
+    """Measured state of the arm joints.
+
+    Attributes:
+        t: simulated time [s].
+        q: (n,) positions [rad].
+        qd: (n,) velocities [rad/s].
+        effort: (n,) joint torques applied by the actuators in the last step [N m].
+    """
+
+    t: float
+    q: np.ndarray
+    qd: np.ndarray
+    effort: np.ndarray
+
+
+class ArmPhysics:
+    """A MuJoCo model of one arm, stepped at `control_dt` in `substeps` physics steps.
+
+    Args:
+        mjcf_xml: the scene (arm, tool, static bodies) as MJCF.
+        joint_names: names of the arm joints in controller order (also the actuator names).
+        control_dt: control period [s].
+        substeps: physics steps per control period; the physics timestep is control_dt / substeps.
+        base_body: body whose frame TCP poses are expressed in (the UR `base` frame).
+        tcp_site: site at the TCP (tool0).
+    """
+
+    def __init__(self, mjcf_xml: str, joint_names: tuple[str, ...], control_dt: float, substeps: int,
+                 base_body: str, tcp_site: str) -> None:
+        self.model = mujoco.MjModel.from_xml_string(mjcf_xml)
+        self.model.opt.timestep = control_dt / substeps
+        self.data = mujoco.MjData(self.model)
+        self.control_dt = control_dt
+        self.substeps = substeps
+        self.joint_names = tuple(joint_names)
+        m = self.model
+
+        def lookup(kind: mujoco.mjtObj, name: str, what: str) -> int:
+            idx = mujoco.mj_name2id(m, kind, name)
+            if idx < 0:
+                raise ConfigError(f"{what} '{name}' is not in the MuJoCo model")
+            return idx
+
+        jids = [lookup(mujoco.mjtObj.mjOBJ_JOINT, j, 'joint') for j in joint_names]
+        self._qpos = np.array([m.jnt_qposadr[j] for j in jids])
+        self._dof = np.array([m.jnt_dofadr[j] for j in jids])
+        self._act = np.array([self._actuator_for(j) for j in jids])
+        self._base = lookup(mujoco.mjtObj.mjOBJ_BODY, base_body, 'body')
+        self._tcp = lookup(mujoco.mjtObj.mjOBJ_SITE, tcp_site, 'site')
+        self._mass = np.zeros((m.nv, m.nv))
+
+    def _actuator_for(self, joint_id: int) -> int:
+        m = self.model
+        for a in range(m.nu):
+            if m.actuator_trntype[a] == mujoco.mjtTrn.mjTRN_JOINT and m.actuator_trnid[a, 0] == joint_id:
+                return a
+        raise ConfigError(f"joint '{mujoco.mj_id2name(self.model, mujoco.mjtObj.mjOBJ_JOINT, joint_id)}' "
+                          'has no actuator in the MuJoCo model')
+
+    def reset(self, q: np.ndarray) -> None:
+        """Put the arm at rest at `q` (n,) [rad], time 0."""
+        mujoco.mj_resetData(self.model, self.data)
+        self.data.qpos[self._qpos] = q
+        mujoco.mj_forward(self.model, self.data)
+        mujoco.mj_step1(self.model, self.data)
+
+    @property
+    def time(self) -> float:
+        """Simulated time [s]."""
+        return float(self.data.time)
+
+    def state(self) -> ArmState:
+        """The arm's measured state now."""
+        d = self.data
+        return ArmState(float(d.time), d.qpos[self._qpos].copy(), d.qvel[self._dof].copy(),
+                        d.actuator_force[self._act].copy())
+
+    def dynamics(self) -> tuple[np.ndarray, np.ndarray]:
+        """M(q) (n, n) [kg m^2] and h(q, qd) = gravity + Coriolis - passive (n,) [N m] at the current state."""
+        mujoco.mj_fullM(self.model, self.data, self._mass)
+        dof = self._dof
+        bias = self.data.qfrc_bias[dof] - self.data.qfrc_passive[dof]
+        return self._mass[np.ix_(dof, dof)].copy(), bias
+
+    def step(self, tau: np.ndarray) -> None:
+        """Apply joint torques `tau` (n,) [N m] for one control period (zero-order hold)."""
+        # Invariant between calls: mj_step1 has run for the current state, so M, h and the TCP pose
+        # read by the caller are those of the state the next torques act on.
+        self.data.ctrl[self._act] = tau
+        for _ in range(self.substeps):
+            mujoco.mj_step2(self.model, self.data)
+            mujoco.mj_step1(self.model, self.data)
+
+    def tcp_pose(self) -> tuple[np.ndarray, np.ndarray]:
+        """TCP pose in the base frame: position (3,) [m] and quaternion (4,) as (x, y, z, w)."""
+        d = self.data
+        r_base = d.xmat[self._base].reshape(3, 3)
+        p = r_base.T @ (d.site_xpos[self._tcp] - d.xpos[self._base])
+        r = r_base.T @ d.site_xmat[self._tcp].reshape(3, 3)
+        wxyz = np.zeros(4)
+        mujoco.mju_mat2Quat(wxyz, r.reshape(9))
+        return p, np.array([wxyz[1], wxyz[2], wxyz[3], wxyz[0]])

@@ -1,0 +1,52 @@
+"""Scene assembly for the simulator: arm + optional tool + optional static bodies, as one MJCF string."""
+from __future__ import annotations
+
+from pathlib import Path
+
+import numpy as np
+import yaml
+
+from ur_sim_driver.errors import ConfigError
+
+
+def config_dir() -> Path:
+    """The package's config/ directory (source tree first, then the installed share directory)."""
+    here = Path(__file__).resolve().parents[1] / 'config'
+    if here.is_dir():
+        return here
+    from ament_index_python.packages import get_package_share_directory
+    return Path(get_package_share_directory('ur_sim_driver')) / 'config'
+
+
+def pose_matrix(xyz: list[float], rpy: list[float]) -> np.ndarray:
+    """4x4 homogeneous transform from translation [m] and fixed-axis roll, pitch, yaw [rad] (URDF convention)."""
+    r, p, y = rpy
+    cr, sr, cp, sp, cy, sy = np.cos(r), np.sin(r), np.cos(p), np.sin(p), np.cos(y), np.sin(y)
+    rot = np.array([[cy * cp, cy * sp * sr - sy * cr, cy * sp * cr + sy * sr],
+                    [sy * cp, sy * sp * sr + cy * cr, sy * sp * cr - cy * sr],
+                    [-sp, cp * sr, cp * cr]])
+    t = np.eye(4)
+    t[:3, :3] = rot
+    t[:3, 3] = xyz
+    return t
+
+
+def load_scene(name: str) -> list[tuple[str, Path, np.ndarray]]:
+    """Static bodies of scene `name` from config/scenes/<name>.yaml: (body name, STL path, 4x4 pose) each.
+
+    Raises:
+        ConfigError: unknown scene (lists the choices) or a missing mesh file.
+    """
+    scenes = config_dir() / 'scenes'
+    choices = sorted(p.stem for p in scenes.glob('*.yaml'))
+    path = scenes / f'{name}.yaml'
+    if not path.is_file():
+        raise ConfigError(f"scene '{name}' is unknown; valid choices: {', '.join(['empty', *choices])}")
+    spec = yaml.safe_load(path.read_text()) or {}
+    bodies = []
+    for body in spec.get('bodies', []):
+        mesh = (config_dir().parent / body['mesh']).resolve()
+        if not mesh.is_file():
+            raise ConfigError(f"scene '{name}': mesh '{body['mesh']}' of body '{body['name']}' not found at {mesh}")
+        bodies.append((body['name'], mesh, pose_matrix(body['pose']['xyz'], body['pose']['rpy'])))
+    return bodies
