@@ -35,6 +35,7 @@ from ur_sim_driver.simulator import Simulator
 from ur_sim_driver.tolerances import default_tolerances, resolve_tolerances
 from ur_sim_driver.validation import map_to_config_order, validate_trajectory
 
+GIL_SWITCH_INTERVAL = 2e-4  # [s]
 _CATCH_UP_LIMIT = 0.1  # [s] of wall time the real-time loop may fall behind before it stops catching up
 
 
@@ -241,7 +242,9 @@ class UrSimNode(Node):
                         next_wall = time.perf_counter()
                 elif self._cycle % 8 == 0:
                     time.sleep(0)  # let executor threads take the GIL in fast mode
-        except Exception as exc:  # the loop must never die silently
+        except Exception as exc:
+            if self._stop.is_set() or not self.context.ok():
+                return  # shutting down: publishers may already be gone
             self.get_logger().fatal(f'simulation loop stopped: {exc!r}')
             raise
 
@@ -313,12 +316,15 @@ class UrSimNode(Node):
 
 def main(argv: list[str] | None = None) -> int:
     """Entry point of `ur_sim` (and `ros2 run ur_sim_driver ur_sim`)."""
+    # The simulation thread gives up the GIL in every MuJoCo and rcl call; with the default 5 ms switch
+    # interval each hand-back can stall it behind an executor thread, which caps the loop far below 500 Hz.
+    sys.setswitchinterval(GIL_SWITCH_INTERVAL)
     rclpy.init(args=argv)
     node = None
     code = 0
     try:
         node = UrSimNode()
-        executor = MultiThreadedExecutor(num_threads=8)
+        executor = MultiThreadedExecutor(num_threads=4)
         executor.add_node(node)
         executor.spin()
     except (KeyboardInterrupt, ExternalShutdownException):

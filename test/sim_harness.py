@@ -1,0 +1,181 @@
+"""An in-process ur_sim node plus a client node on a private context, spun by a background executor."""
+from __future__ import annotations
+
+import threading
+import time
+from collections.abc import Iterator
+from contextlib import contextmanager
+from dataclasses import dataclass, field
+
+import numpy as np
+import rclpy
+from builtin_interfaces.msg import Duration
+from control_msgs.action import FollowJointTrajectory
+from control_msgs.msg import JointTolerance, SpeedScalingFactor
+from rclpy.action import ActionClient
+from rclpy.executors import MultiThreadedExecutor, SingleThreadedExecutor
+from rclpy.node import Node
+from rclpy.parameter import Parameter
+from rclpy.qos import QoSProfile
+from ros_helpers import ros_context
+from sensor_msgs.msg import JointState
+from trajectory_msgs.msg import JointTrajectory, JointTrajectoryPoint
+
+from ur_sim_driver.node import UrSimNode
+
+TIMEOUT = 30.0  # [s] wall-clock deadline of any single wait
+
+
+def wait_for(condition, timeout: float = TIMEOUT, what: str = 'condition') -> None:
+    """Poll `condition()` (the executor spins in its own thread) until true or the deadline passes."""
+    deadline = time.monotonic() + timeout
+    while not condition():
+        if time.monotonic() > deadline:
+            raise TimeoutError(f'timed out after {timeout:.0f} s waiting for {what}')
+        time.sleep(0.002)
+
+
+def duration(t: float) -> Duration:
+    ns = round(t * 1e9)
+    return Duration(sec=ns // 1_000_000_000, nanosec=ns % 1_000_000_000)
+
+
+def point(q, t: float, qd=None, qdd=None) -> JointTrajectoryPoint:
+    p = JointTrajectoryPoint(positions=[float(x) for x in q], time_from_start=duration(t))
+    if qd is not None:
+        p.velocities = [float(x) for x in qd]
+    if qdd is not None:
+        p.accelerations = [float(x) for x in qdd]
+    return p
+
+
+def trajectory(names, points) -> JointTrajectory:
+    return JointTrajectory(joint_names=list(names), points=list(points))
+
+
+@dataclass
+class Recording:
+    """Joint states received: stamps (K,) [s], positions and velocities (K, n)."""
+
+    t: list = field(default_factory=list)
+    q: list = field(default_factory=list)
+    qd: list = field(default_factory=list)
+
+    def arrays(self):
+        return np.array(self.t), np.array(self.q), np.array(self.qd)
+
+
+class SimHarness:
+    """Client-side helpers against a running ur_sim."""
+
+    def __init__(self, sim: UrSimNode, client: Node, executor: MultiThreadedExecutor) -> None:
+        self.sim = sim
+        self.client = client
+        self.executor = executor
+        p = sim.cfg.prefixed
+        ctrl = sim.cfg.controller_name
+        self.joints = list(sim.sim.joint_names)
+        self.action = ActionClient(client, FollowJointTrajectory, p(f'{ctrl}/follow_joint_trajectory'))
+        self.topic = client.create_publisher(JointTrajectory, p(f'{ctrl}/joint_trajectory'), 10)
+        self.scaling = client.create_publisher(SpeedScalingFactor, p(f'{ctrl}/speed_scaling_input'), 10)
+        self.recording: Recording | None = None
+        self._js_topic = p('joint_states')
+        self._recorder: Node | None = None
+        wait_for(lambda: self.action.server_is_ready(), what='the FollowJointTrajectory server')
+        wait_for(lambda: self.topic.get_subscription_count() > 0, what='the joint_trajectory subscriber')
+
+    def _on_js(self, msg: JointState) -> None:
+        rec = self.recording
+        if rec is not None:
+            rec.t.append(msg.header.stamp.sec + msg.header.stamp.nanosec * 1e-9)
+            rec.q.append(list(msg.position))
+            rec.qd.append(list(msg.velocity))
+
+    def record(self) -> Recording:
+        """Start recording /joint_states (a subscription exists only while recording: in fast mode it is costly)."""
+        self.recording = Recording()
+        if self._recorder is None:
+            # A node with its own executor and thread, so that it can be stopped cleanly before it is
+            # destroyed (destroying entities under a spinning executor races in rclpy).
+            node = Node('test_recorder', context=self.client.context)
+            node.create_subscription(JointState, self._js_topic, self._on_js, QoSProfile(depth=1000))
+            executor = SingleThreadedExecutor(context=self.client.context)
+            executor.add_node(node)
+            thread = threading.Thread(target=executor.spin, daemon=True)
+            thread.start()
+            self._recorder = (node, executor, thread)
+            wait_for(lambda: self.recording.t, what='the first recorded joint state')
+            self.recording = Recording()
+        return self.recording
+
+    def stop_recording(self) -> Recording:
+        """Stop recording and return what was recorded."""
+        rec, self.recording = self.recording, None  # the callback stops appending at once
+        if self._recorder is not None:
+            node, executor, thread = self._recorder
+            executor.shutdown(timeout_sec=2.0)
+            thread.join(timeout=5.0)
+            node.destroy_node()
+            self._recorder = None
+        return rec
+
+    @property
+    def q(self) -> np.ndarray:
+        return self.sim.sim.state().q
+
+    def goal(self, points, names=None, path_tol=(), goal_tol=(), goal_time=0.0) -> FollowJointTrajectory.Goal:
+        g = FollowJointTrajectory.Goal()
+        g.trajectory = trajectory(names or self.joints, points)
+        g.path_tolerance = [JointTolerance(name=n, position=p, velocity=v, acceleration=a) for n, p, v, a in path_tol]
+        g.goal_tolerance = [JointTolerance(name=n, position=p, velocity=v, acceleration=a) for n, p, v, a in goal_tol]
+        g.goal_time_tolerance = duration(goal_time)
+        return g
+
+    def send(self, goal, feedback=None):
+        """Send a goal and wait for the server's answer; returns the goal handle (check .accepted)."""
+        future = self.action.send_goal_async(goal, feedback_callback=feedback)
+        wait_for(future.done, what='the goal response')
+        return future.result()
+
+    def result(self, handle, timeout: float = TIMEOUT):
+        """Wait for the result of an accepted goal: (status, error_code, error_string)."""
+        future = handle.get_result_async()
+        wait_for(future.done, timeout, 'the goal result')
+        r = future.result()
+        return r.status, r.result.error_code, r.result.error_string
+
+    def wait_sim_time(self, dt: float) -> None:
+        """Wait until `dt` [s] of simulated time has passed."""
+        t_end = self.sim.sim.time + dt
+        wait_for(lambda: self.sim.sim.time >= t_end, what=f'{dt} s of simulated time')
+
+
+def _param(name, value) -> Parameter:
+    return Parameter(name, value=value)
+
+
+@contextmanager
+def running_sim(**params) -> Iterator[SimHarness]:
+    """ur_sim (as fast as possible unless `real_time_factor` is given) with a client, on a private context."""
+    params.setdefault('real_time_factor', 0.0)
+    with ros_context() as ctx:
+        sim = UrSimNode(context=ctx, parameter_overrides=[_param(k, v) for k, v in params.items()])
+        client = Node('test_client', context=ctx)
+        executor = MultiThreadedExecutor(num_threads=4, context=ctx)
+        executor.add_node(sim)
+        executor.add_node(client)
+        thread = threading.Thread(target=executor.spin, daemon=True)
+        thread.start()
+        harness = None
+        try:
+            harness = SimHarness(sim, client, executor)
+            yield harness
+        finally:
+            if harness is not None:
+                harness.stop_recording()
+            sim.shutdown()
+            executor.shutdown(timeout_sec=2.0)
+            thread.join(timeout=5.0)
+            client.destroy_node()
+            sim.destroy_node()
+            rclpy.try_shutdown(context=ctx)

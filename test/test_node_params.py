@@ -1,0 +1,47 @@
+"""ur_sim parameters: presets, names on the graph, invalid values stop start-up with a clear message."""
+import subprocess
+import sys
+
+import pytest
+from rclpy.parameter import Parameter
+from ros_helpers import ros_context
+from sim_harness import running_sim, wait_for
+
+from ur_sim_driver.errors import ConfigError
+from ur_sim_driver.node import UrSimNode
+
+
+def test_seed_ur10_preset_names_exist():
+    import yaml
+
+    from ur_sim_driver.scene import config_dir
+    preset = yaml.safe_load((config_dir() / 'seed_ur10.yaml').read_text())['/**']['ros__parameters']
+    with running_sim(**preset) as h:
+        assert h.sim.sim.params.name.lower() == 'ur10'
+        topics = dict()
+        wait_for(lambda: topics.update(h.client.get_topic_names_and_types()) or
+                 '/ur10/joint_states' in topics, what='/ur10/joint_states')
+        assert 'sensor_msgs/msg/JointState' in topics['/ur10/joint_states']
+        assert '/ur10/vel_based_pos_traj_controller/joint_trajectory' in topics
+        assert h.action.server_is_ready()
+        assert h.action._action_name == '/ur10/vel_based_pos_traj_controller/follow_joint_trajectory'
+
+
+@pytest.mark.parametrize(('name', 'value', 'expected'), [
+    ('ur_type', 'ur3', "'ur_type' = 'ur3' is invalid; valid choices: ur5, ur5e, ur10, ur10e"),
+    ('real_time_factor', -1.0, "'real_time_factor' = -1.0 is outside the allowed range [0.0, 100.0]"),
+    ('speed_scaling_initial_factor', 1.5, "'speed_scaling_initial_factor' = 1.5 is outside"),
+    ('tool', 'gripper', "'tool' = 'gripper' is invalid; valid choices: none, dispenser"),
+    ('initial_positions', [0.0, 0.0, 4.0, 0.0, 0.0, 0.0], "'initial_positions' [2] = 4.0 rad is outside"),
+])
+def test_invalid_parameter_names_parameter_value_and_range(name, value, expected):
+    with ros_context() as ctx, pytest.raises(ConfigError) as err:
+        UrSimNode(context=ctx, parameter_overrides=[Parameter(name, value=value)], start=False)
+    assert expected in str(err.value)
+
+
+def test_console_script_exits_nonzero_with_message_on_bad_parameter():
+    proc = subprocess.run([sys.executable, '-m', 'ur_sim_driver.node', '--ros-args', '-p', 'ur_type:=ur3'],
+                          capture_output=True, text=True, timeout=60)
+    assert proc.returncode == 2
+    assert "'ur_type' = 'ur3' is invalid" in proc.stderr
