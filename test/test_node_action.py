@@ -117,3 +117,11 @@ def test_invalid_goals_are_rejected_and_the_robot_holds(h):
     # ... and the node keeps serving.
     ok = h.send(h.goal([point(q0, 0.2, ZERO)]))
     assert ok.accepted and h.result(ok)[1] == rc.SUCCESSFUL
+
+
+def test_goal_faster_than_velocity_limits_is_rejected(h):
+    # UR5e: 180 deg/s on every joint; 1 rad in 0.2 s is 5 rad/s.
+    q = h.q
+    handle = h.send(h.goal([point(q, 0.1), point(q + np.array([1.0, 0, 0, 0, 0, 0]), 0.3, ZERO)]))
+    assert not handle.accepted
+    assert np.abs(h.q - q).max() < 1e-3

@@ -281,3 +281,35 @@ def test_mapped_arrays_are_read_only():
     pts = map_to_config_order(with_points(good_points()), JOINTS, np.zeros(6))
     with pytest.raises(ValueError):
         pts.positions[0, 0] = 1.0
+
+
+V_MAX = np.array([2.0, 2.0, 3.0, 3.0, 3.0, 3.0])
+
+
+def validate_with_speed(cmd):
+    return validate_trajectory(cmd, joint_names_config=JOINTS, q_min=Q_MIN, q_max=Q_MAX, now=NOW, v_max=V_MAX)
+
+
+def test_velocity_limits_pass_for_slow_trajectories():
+    assert validate_with_speed(with_points(good_points())) is None
+
+
+def test_given_velocity_above_limit_names_point_joint_and_limit():
+    points = good_points()
+    points[1] = make_point(1.0, [0.1] * 6, [0.0, 2.5, 0.0, 0.0, 0.0, 0.0])
+    reason = validate_with_speed(with_points(points))
+    assert reason == ("points[1].velocities[shoulder_lift_joint] = 2.5 rad/s exceeds the velocity limit "
+                      "2.0000 rad/s")
+
+
+def test_segment_mean_velocity_above_limit_is_rejected():
+    # elbow moves 1.6 rad in 0.5 s = 3.2 rad/s > 3.0 rad/s
+    points = [make_point(0.5, [0.0] * 6), make_point(1.0, [0.0, 0.0, 1.6, 0.0, 0.0, 0.0])]
+    reason = validate_with_speed(with_points(points))
+    assert reason is not None
+    assert 'points[0] -> points[1] moves elbow_joint at 3.2 rad/s' in reason and '3.0000 rad/s' in reason
+
+
+def test_first_point_jump_is_not_a_velocity_violation():
+    # The segment from the measured state is the path tolerance's business (upstream jump semantics).
+    assert validate_with_speed(with_points([make_point(0.0, [1.5] * 6), make_point(1.0, [1.5] * 6)])) is None

@@ -7,6 +7,7 @@ the node publishes on /clock.
 """
 from __future__ import annotations
 
+import signal
 import sys
 import threading
 import time
@@ -21,6 +22,7 @@ from rclpy.callback_groups import MutuallyExclusiveCallbackGroup, ReentrantCallb
 from rclpy.executors import ExternalShutdownException, MultiThreadedExecutor
 from rclpy.node import Node
 from rclpy.qos import DurabilityPolicy, QoSProfile
+from rclpy.signals import SignalHandlerOptions
 from rosgraph_msgs.msg import Clock
 from sensor_msgs.msg import JointState
 from std_msgs.msg import Float64, String
@@ -135,7 +137,7 @@ class UrSimNode(Node):
     def _validate(self, msg: JointTrajectory) -> str | None:
         return validate_trajectory(
             conv.trajectory_command(msg), joint_names_config=self.cfg.joints, q_min=self.sim.params.q_min,
-            q_max=self.sim.params.q_max, now=self.sim.time,
+            q_max=self.sim.params.q_max, v_max=self.sim.params.v_max, now=self.sim.time,
             allow_partial=self.cfg.allow_partial_joints_goal,
             allow_nonzero_end_velocity=self.cfg.allow_nonzero_velocity_at_trajectory_end)
 
@@ -315,18 +317,24 @@ class UrSimNode(Node):
 
 
 def main(argv: list[str] | None = None) -> int:
-    """Entry point of `ur_sim` (and `ros2 run ur_sim_driver ur_sim`)."""
+    """Entry point of `ur_sim` (and `ros2 run ur_sim_driver ur_sim`). Exits 0 on SIGINT/SIGTERM, 2 on bad parameters."""
     # The simulation thread gives up the GIL in every MuJoCo and rcl call; with the default 5 ms switch
     # interval each hand-back can stall it behind an executor thread, which caps the loop far below 500 Hz.
     sys.setswitchinterval(GIL_SWITCH_INTERVAL)
-    rclpy.init(args=argv)
+    # Our own signal handling: stop the simulation thread first, then shut the context down, so that no
+    # publish races the context's destruction.
+    rclpy.init(args=argv, signal_handler_options=SignalHandlerOptions.NO)
+    stop = threading.Event()
+    for sig in (signal.SIGINT, signal.SIGTERM):
+        signal.signal(sig, lambda *_: stop.set())
     node = None
+    executor = MultiThreadedExecutor(num_threads=4)
     code = 0
     try:
         node = UrSimNode()
-        executor = MultiThreadedExecutor(num_threads=4)
         executor.add_node(node)
-        executor.spin()
+        while not stop.is_set() and rclpy.ok():
+            executor.spin_once(timeout_sec=0.1)
     except (KeyboardInterrupt, ExternalShutdownException):
         pass
     except UrSimError as exc:
@@ -335,6 +343,8 @@ def main(argv: list[str] | None = None) -> int:
     finally:
         if node is not None:
             node.shutdown()
+        executor.shutdown(timeout_sec=2.0)
+        if node is not None:
             node.destroy_node()
         rclpy.try_shutdown()
     return code

@@ -61,6 +61,7 @@ class ArmPhysics:
         self._base = lookup(mujoco.mjtObj.mjOBJ_BODY, base_body, 'body')
         self._tcp = lookup(mujoco.mjtObj.mjOBJ_SITE, tcp_site, 'site')
         self._mass = np.zeros((m.nv, m.nv))
+        self._mass_index = np.ix_(self._dof, self._dof)
 
     def _actuator_for(self, joint_id: int) -> int:
         m = self.model
@@ -93,7 +94,7 @@ class ArmPhysics:
         mujoco.mj_fullM(self.model, self.data, self._mass)
         dof = self._dof
         bias = self.data.qfrc_bias[dof] - self.data.qfrc_passive[dof]
-        return self._mass[np.ix_(dof, dof)].copy(), bias
+        return self._mass[self._mass_index], bias
 
     def step(self, tau: np.ndarray) -> None:
         """Apply joint torques `tau` (n,) [N m] for one control period (zero-order hold)."""

@@ -176,6 +176,40 @@ def check_joint_limits(
     return None
 
 
+def check_velocity_limits(
+    cmd: TrajectoryCommand,
+    index: int,
+    joint_names_config: Sequence[str],
+    v_max: np.ndarray,
+) -> str | None:
+    """Given velocities, and the mean velocity of the segment ending at point `index`, must not exceed v_max.
+
+    The segment from the measured state to point 0 is not checked: upstream lets a first point at time 0
+    make the reference jump, which the path tolerance then reports.
+
+    Args:
+        v_max: (n,) velocity limits, config order [rad/s].
+    """
+    config = list(joint_names_config)
+    point = cmd.points[index]
+    for name, value in zip(cmd.joint_names, point.velocities):
+        limit = float(v_max[config.index(name)])
+        if abs(value) > limit + LIMIT_SLACK:
+            return (f"points[{index}].velocities[{name}] = {value:.6g} rad/s exceeds the velocity limit "
+                    f"{limit:.4f} rad/s")
+    if index == 0:
+        return None
+    prev = cmd.points[index - 1]
+    dt = point.time_from_start - prev.time_from_start
+    for name, q1, q0 in zip(cmd.joint_names, point.positions, prev.positions):
+        limit = float(v_max[config.index(name)])
+        mean = abs(q1 - q0) / dt
+        if mean > limit + LIMIT_SLACK:
+            return (f"points[{index - 1}] -> points[{index}] moves {name} at {mean:.6g} rad/s on average, above "
+                    f"its velocity limit {limit:.4f} rad/s (make time_from_start longer)")
+    return None
+
+
 def validate_trajectory(
     cmd: TrajectoryCommand,
     *,
@@ -185,6 +219,7 @@ def validate_trajectory(
     now: float,
     allow_partial: bool = False,
     allow_nonzero_end_velocity: bool = False,
+    v_max: np.ndarray | None = None,
 ) -> str | None:
     """Run every rule in upstream order and return the first reason, or None if valid.
 
@@ -196,6 +231,7 @@ def validate_trajectory(
         now: Current time on the controller's clock [s].
         allow_partial: Upstream ``allow_partial_joints_goal``.
         allow_nonzero_end_velocity: Upstream ``allow_nonzero_velocity_at_trajectory_end``.
+        v_max: (n,) velocity limits, config order [rad/s]; None skips the velocity check.
     """
     reason = (
         check_joint_count(cmd, joint_names_config, allow_partial)
@@ -215,6 +251,8 @@ def validate_trajectory(
             return reason
     for i in range(len(cmd.points)):
         reason = check_finite(cmd, i) or check_joint_limits(cmd, i, joint_names_config, q_min, q_max)
+        if reason is None and v_max is not None:
+            reason = check_velocity_limits(cmd, i, joint_names_config, v_max)
         if reason:
             return reason
     return None

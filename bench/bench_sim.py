@@ -1,0 +1,220 @@
+"""Simulator benchmark: real-time factor, /joint_states timing, goal latency and tracking error.
+
+Writes out/bench/sim.json (through `python -m bench`). The simulator runs as its own process (`ur_sim`),
+as users run it; the measuring side is this process.
+"""
+from __future__ import annotations
+
+import os
+import platform
+import signal
+import subprocess
+import threading
+import time
+from pathlib import Path
+
+import mujoco
+import numpy as np
+import rclpy
+from builtin_interfaces.msg import Duration
+from control_msgs.action import FollowJointTrajectory
+from rclpy.action import ActionClient
+from rclpy.context import Context
+from rclpy.executors import SingleThreadedExecutor
+from rclpy.node import Node
+from rclpy.qos import QoSProfile, ReliabilityPolicy
+from rosgraph_msgs.msg import Clock
+from sensor_msgs.msg import JointState
+from trajectory_msgs.msg import JointTrajectoryPoint
+
+from ur_sim_driver.jtc import TrajectoryController
+from ur_sim_driver.sim_config import sim_config_from_params
+from ur_sim_driver.simulator import Simulator
+from ur_sim_driver.tolerances import default_tolerances
+from ur_sim_driver.trajectory_types import TrajectoryCommand
+from ur_sim_driver.validation import map_to_config_order
+
+RATE_WINDOW = float(os.environ.get('UR_SIM_BENCH_RATE_SECONDS', '30'))  # [s] of real-time /joint_states
+JOINTS = ['shoulder_pan_joint', 'shoulder_lift_joint', 'elbow_joint', 'wrist_1_joint', 'wrist_2_joint',
+          'wrist_3_joint']
+HOME = np.array([0.0, -1.57, 0.0, -1.57, 0.0, 0.0])
+# The standard 6-joint trajectory: every joint moves, through a via point with velocity, and back to rest.
+STANDARD = dict(times=[1.5, 3.0, 4.5],
+                positions=[HOME + [0.6, 0.4, -0.5, 0.5, 0.8, 1.0], HOME + [-0.3, 0.2, 0.4, -0.4, -0.5, 0.5],
+                           HOME],
+                velocities=[np.zeros(6), [-0.4, 0.0, 0.3, -0.3, -0.5, -0.2], np.zeros(6)],
+                accelerations=[np.zeros(6)] * 3)
+
+
+class _SimProcess:
+    """`ur_sim` in its own process group, stopped with SIGINT."""
+
+    def __init__(self, *args: str) -> None:
+        self.proc = subprocess.Popen(['ur_sim', '--ros-args', *args], stdout=subprocess.DEVNULL,
+                                     stderr=subprocess.DEVNULL, start_new_session=True)
+
+    def stop(self) -> int:
+        os.killpg(self.proc.pid, signal.SIGINT)
+        return self.proc.wait(timeout=20)
+
+
+class _Probe:
+    """A node on a private context, spun in a background thread."""
+
+    def __init__(self) -> None:
+        self.ctx = Context()
+        rclpy.init(context=self.ctx)
+        self.node = Node('bench_probe', context=self.ctx)
+        self.executor = SingleThreadedExecutor(context=self.ctx)
+        self.executor.add_node(self.node)
+        self.thread = threading.Thread(target=self.executor.spin, daemon=True)
+        self.thread.start()
+
+    def close(self) -> None:
+        self.executor.shutdown(timeout_sec=2.0)
+        self.thread.join(timeout=5.0)
+        self.node.destroy_node()
+        rclpy.try_shutdown(context=self.ctx)
+
+
+def _wait(cond, timeout: float, what: str) -> None:
+    deadline = time.monotonic() + timeout
+    while not cond():
+        if time.monotonic() > deadline:
+            raise TimeoutError(f'bench: timed out waiting for {what}')
+        time.sleep(0.001)
+
+
+def raw_mj_step_rtf(cfg_params: dict, seconds: float = 5.0) -> float:
+    """RTF of bare mj_step on the simulator's own model (same timestep)."""
+    sim = Simulator(sim_config_from_params(cfg_params))
+    m, d = sim.physics.model, sim.physics.data
+    steps = int(seconds / m.opt.timestep)
+    t0 = time.perf_counter()
+    for _ in range(steps):
+        mujoco.mj_step(m, d)
+    return seconds / (time.perf_counter() - t0)
+
+
+def fast_mode_rtf(seconds: float = 10.0) -> float:
+    """RTF of the ur_sim process in as-fast-as-possible mode, read from /clock over `seconds` of wall time."""
+    sim = _SimProcess('-p', 'real_time_factor:=0.0')
+    probe = _Probe()
+    stamps: list[tuple[float, float]] = []
+    qos = QoSProfile(depth=1, reliability=ReliabilityPolicy.BEST_EFFORT)
+    probe.node.create_subscription(
+        Clock, '/clock', lambda m: stamps.append((time.perf_counter(), m.clock.sec + m.clock.nanosec * 1e-9)), qos)
+    try:
+        _wait(lambda: stamps, 30.0, '/clock')
+        start = len(stamps)
+        time.sleep(seconds)
+        (w0, s0), (w1, s1) = stamps[start], stamps[-1]
+        return (s1 - s0) / (w1 - w0)
+    finally:
+        probe.close()
+        sim.stop()
+
+
+def realtime_rate_and_latency() -> dict:
+    """/joint_states periods in real-time mode, and the latency from goal acceptance to first motion."""
+    sim = _SimProcess('-p', 'real_time_factor:=1.0')
+    probe = _Probe()
+    received: list[tuple[float, float, np.ndarray]] = []
+    probe.node.create_subscription(
+        JointState, '/joint_states',
+        lambda m: received.append((time.perf_counter(), m.header.stamp.sec + m.header.stamp.nanosec * 1e-9,
+                                   np.array(m.position))), QoSProfile(depth=100))
+    client = ActionClient(probe.node, FollowJointTrajectory,
+                          '/scaled_joint_trajectory_controller/follow_joint_trajectory')
+    try:
+        _wait(lambda: len(received) > 100, 30.0, '/joint_states')
+        start = len(received)
+        time.sleep(RATE_WINDOW)
+        window = received[start:]
+        wall = np.array([w for w, _, _ in window])
+        periods = np.diff(wall)
+        _wait(client.server_is_ready, 30.0, 'the action server')
+        latencies = []
+        for k in range(5):
+            q0 = received[-1][2]
+            goal = FollowJointTrajectory.Goal()
+            goal.trajectory.joint_names = JOINTS
+            target = q0 + (0.2 if k % 2 == 0 else -0.2)
+            goal.trajectory.points = [JointTrajectoryPoint(positions=target.tolist(), velocities=[0.0] * 6,
+                                                           time_from_start=Duration(sec=1))]
+            n_before = len(received)
+            sent_wall, sent_stamp = time.perf_counter(), received[-1][1]
+            future = client.send_goal_async(goal)
+            _wait(future.done, 10.0, 'goal response')
+            accepted_wall = time.perf_counter()
+            def moved(q0=q0, n_before=n_before):
+                return next(((w, s) for w, s, p in received[n_before:] if np.abs(p - q0).max() > 1e-6), None)
+            _wait(moved, 10.0, 'motion')
+            first = moved()
+            latencies.append({'wall_ms': (first[0] - sent_wall) * 1e3,
+                              'response_ms': (accepted_wall - sent_wall) * 1e3,
+                              'sim_ms': (first[1] - sent_stamp) * 1e3})
+            result = future.result().get_result_async()
+            _wait(result.done, 10.0, 'result')
+        return {
+            'window_s': RATE_WINDOW,
+            'messages': len(window),
+            'mean_rate_hz': (len(window) - 1) / (wall[-1] - wall[0]),
+            'period_ms': {'p50': float(np.percentile(periods, 50) * 1e3),
+                          'p99': float(np.percentile(periods, 99) * 1e3), 'max': float(periods.max() * 1e3)},
+            'goal_to_first_motion_ms': {
+                'wall_max': max(x['wall_ms'] for x in latencies),
+                'wall_mean': float(np.mean([x['wall_ms'] for x in latencies])),
+                'goal_response_mean': float(np.mean([x['response_ms'] for x in latencies])),
+                'sim_max': max(x['sim_ms'] for x in latencies),
+                'note': 'wall: from send_goal_async at the client to the first moved /joint_states received by the '
+                        'client (both DDS hops included); sim: stamp of that message minus the newest stamp the '
+                        'client had when it sent the goal',
+            },
+        }
+    finally:
+        probe.close()
+        sim.stop()
+
+
+def tracking_error(ur_type: str = 'ur5e') -> dict:
+    """Max |reference - measured| over the standard 6-joint trajectory, in the core loop the node runs."""
+    cfg = sim_config_from_params({'ur_type': ur_type})
+    sim = Simulator(cfg)
+    tol = default_tolerances(cfg.joints, trajectory=0.2, goal=0.1, stopped_velocity=0.2, goal_time=0.0)
+    state = sim.state()
+    jtc = TrajectoryController(cfg.joints, tol, state.q)
+    cmd = TrajectoryCommand.from_arrays(JOINTS, **STANDARD)
+    jtc.start(map_to_config_order(cmd, cfg.joints, state.q), state.t, state.q, state.qd, token='bench')
+    worst = np.zeros(6)
+    steps = int(5.0 / sim.control_dt)
+    for _ in range(steps):
+        state = sim.state()
+        ref, _ = jtc.update(state.t, sim.control_dt, state.q, state.qd)
+        worst = np.maximum(worst, np.abs(ref.positions - state.q))
+        sim.advance(state, ref)
+    return {'ur_type': ur_type, 'control_rate_hz': sim.control_rate, 'max_error_mrad': float(worst.max() * 1e3),
+            'per_joint_mrad': (worst * 1e3).round(4).tolist()}
+
+
+def run() -> dict:
+    raw = raw_mj_step_rtf({'ur_type': 'ur5e'})
+    fast = fast_mode_rtf()
+    rt = realtime_rate_and_latency()
+    return {
+        'machine': {'cpus': os.cpu_count(), 'processor': platform.processor() or platform.machine(),
+                    'python': platform.python_version(), 'mujoco': mujoco.__version__},
+        'fast_mode': {'ur_type': 'ur5e', 'control_rate_hz': 500, 'rtf': fast, 'raw_mj_step_rtf': raw,
+                      'ratio_to_raw': fast / raw, 'target_rtf': 20},
+        'real_time': {**rt, 'nominal_rate_hz': 500, 'targets': {'rate_within': '1 %', 'p99_period_ms': 3.0,
+                                                                 'latency': '<= 1 control period (2 ms)'}},
+        'tracking': [tracking_error('ur5e'), tracking_error('ur10')],
+        'tracking_target_mrad': 0.5,
+    }
+
+
+if __name__ == '__main__':
+    import json
+    out = Path(__file__).resolve().parents[1] / 'out' / 'bench'
+    out.mkdir(parents=True, exist_ok=True)
+    (out / 'sim.json').write_text(json.dumps(run(), indent=2))

@@ -1,0 +1,67 @@
+"""The installed executables, found the way `ros2 run` finds them, run and stop cleanly on signals."""
+import os
+import signal
+import subprocess
+import time
+from pathlib import Path
+
+import pytest
+from ament_index_python.packages import get_package_prefix, get_resource
+from rclpy.node import Node
+from ros_helpers import executor_with, ros_context, spin_until
+from sensor_msgs.msg import JointState
+
+
+def _executable(name: str) -> Path:
+    # `ros2 run PKG EXE` looks for an executable <prefix>/lib/PKG/EXE of the package found in the ament index.
+    get_resource('packages', 'ur_sim_driver')
+    path = Path(get_package_prefix('ur_sim_driver')) / 'lib' / 'ur_sim_driver' / name
+    assert path.is_file() and os.access(path, os.X_OK), f'{path} is not an executable'
+    return path
+
+
+@pytest.mark.parametrize('sig', [signal.SIGINT, signal.SIGTERM])
+def test_ur_sim_publishes_joint_states_and_exits_cleanly_on_signal(sig):
+    proc = subprocess.Popen([str(_executable('ur_sim')), '--ros-args', '-p', 'real_time_factor:=0.0'],
+                            stdout=subprocess.PIPE, stderr=subprocess.STDOUT, text=True, start_new_session=True)
+    received = []
+    try:
+        with ros_context() as ctx:
+            node = Node('exe_probe', context=ctx)
+            node.create_subscription(JointState, '/joint_states', received.append, 10)
+            with executor_with(ctx, node) as ex:
+                spin_until(ex, lambda: len(received) >= 5, 30.0, '/joint_states from the ur_sim process')
+    finally:
+        os.killpg(proc.pid, sig)
+        try:
+            out, _ = proc.communicate(timeout=20)
+        except subprocess.TimeoutExpired:
+            proc.kill()
+            raise
+    assert proc.returncode == 0, out
+    assert 'Traceback' not in out
+    assert list(received[-1].name) == ['shoulder_pan_joint', 'shoulder_lift_joint', 'elbow_joint', 'wrist_1_joint',
+                                       'wrist_2_joint', 'wrist_3_joint']
+    assert len(received[-1].effort) == 6
+
+
+def test_ur_glue_planner_executable_is_installed():
+    _executable('ur_glue_planner')
+
+
+def test_timestamps_are_simulated_time():
+    proc = subprocess.Popen([str(_executable('ur_sim')), '--ros-args', '-p', 'real_time_factor:=0.0'],
+                            stdout=subprocess.DEVNULL, stderr=subprocess.DEVNULL, start_new_session=True)
+    received = []
+    try:
+        with ros_context() as ctx:
+            node = Node('exe_probe_time', context=ctx)
+            node.create_subscription(JointState, '/joint_states', received.append, 10)
+            with executor_with(ctx, node) as ex:
+                spin_until(ex, lambda: len(received) >= 2, 30.0, '/joint_states')
+    finally:
+        os.killpg(proc.pid, signal.SIGINT)
+        proc.wait(timeout=20)
+    stamp = received[-1].header.stamp
+    # Simulated time starts at 0; a wall-clock stamp would be ~1.7e9 s.
+    assert 0 < stamp.sec + stamp.nanosec * 1e-9 < time.time() / 1000
