@@ -107,6 +107,11 @@ def test_invalid_goals_are_rejected_and_the_robot_holds(h):
         'outside limits': h.goal([point(q0 + np.array([0, 0, 4.0, 0, 0, 0]), 1.0)]),
         'not finite': h.goal([point(q0 + np.array([np.nan, 0, 0, 0, 0, 0]), 1.0)]),
     }
+    old = h.goal([point(q0, 0.001)])
+    old.trajectory.header.stamp.nanosec = 1_000_000  # sim time 0.001 s: ends long before now
+    bad_goals['end already past'] = old
+    duplicate = h.goal([point(q0, 1.0)], names=names[:5] + ['shoulder_pan_joint'])
+    bad_goals['duplicate joint'] = duplicate
     effort = h.goal([point(q0, 1.0)])
     effort.trajectory.points[0].effort = [0.0] * 6
     bad_goals['effort given'] = effort

@@ -45,3 +45,12 @@ def test_console_script_exits_nonzero_with_message_on_bad_parameter():
                           capture_output=True, text=True, timeout=60)
     assert proc.returncode == 2
     assert "'ur_type' = 'ur3' is invalid" in proc.stderr
+
+
+def test_viewer_without_display_runs_headless(monkeypatch):
+    monkeypatch.delenv('DISPLAY', raising=False)
+    monkeypatch.delenv('WAYLAND_DISPLAY', raising=False)
+    with running_sim(viewer=True) as h:
+        t0 = h.sim.sim.time
+        h.wait_sim_time(0.1)
+        assert h.sim.sim.time > t0

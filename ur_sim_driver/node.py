@@ -7,6 +7,7 @@ the node publishes on /clock.
 """
 from __future__ import annotations
 
+import os
 import signal
 import sys
 import threading
@@ -38,6 +39,7 @@ from ur_sim_driver.tolerances import default_tolerances, resolve_tolerances
 from ur_sim_driver.validation import map_to_config_order, validate_trajectory
 
 GIL_SWITCH_INTERVAL = 2e-4  # [s]
+VIEWER_FRAME_PERIOD = 1.0 / 30.0  # [s] of wall time
 _CATCH_UP_LIMIT = 0.1  # [s] of wall time the real-time loop may fall behind before it stops catching up
 
 
@@ -227,7 +229,23 @@ class UrSimNode(Node):
             waiter.finish(outcome)
 
     # ---- simulation loop (own thread) ------------------------------------------------------------
+    def _open_viewer(self):
+        """MuJoCo's passive viewer where a display exists (`viewer: true`), else None with a warning."""
+        if not self.cfg.viewer:
+            return None
+        if not (os.environ.get('DISPLAY') or os.environ.get('WAYLAND_DISPLAY')):
+            self.get_logger().warning('viewer: true but no display (DISPLAY is unset); running without a viewer')
+            return None
+        try:
+            import mujoco.viewer
+            return mujoco.viewer.launch_passive(self.sim.physics.model, self.sim.physics.data)
+        except Exception as exc:  # a broken GL setup must not stop the simulation
+            self.get_logger().warning(f'viewer could not be opened ({exc!r}); running without a viewer')
+            return None
+
     def _run(self) -> None:
+        viewer = self._open_viewer()
+        next_frame = 0.0
         dt = self.sim.control_dt
         rtf = self.cfg.real_time_factor
         wall_period = dt / rtf if rtf > 0 else 0.0
@@ -235,6 +253,10 @@ class UrSimNode(Node):
         try:
             while not self._stop.is_set():
                 self.step_once()
+                if viewer is not None and time.perf_counter() >= next_frame:
+                    with self._lock:
+                        viewer.sync()
+                    next_frame = time.perf_counter() + VIEWER_FRAME_PERIOD
                 if wall_period > 0.0:
                     next_wall += wall_period
                     delay = next_wall - time.perf_counter()
@@ -249,6 +271,9 @@ class UrSimNode(Node):
                 return  # shutting down: publishers may already be gone
             self.get_logger().fatal(f'simulation loop stopped: {exc!r}')
             raise
+        finally:
+            if viewer is not None:
+                viewer.close()
 
     def step_once(self) -> None:
         """One control cycle: measure, update the JTC, apply torques, step physics, publish."""

@@ -31,11 +31,13 @@ def pose_matrix(xyz: list[float], rpy: list[float]) -> np.ndarray:
     return t
 
 
-def load_scene(name: str) -> list[tuple[str, Path, np.ndarray]]:
-    """Static bodies of scene `name` from config/scenes/<name>.yaml: (body name, STL path, 4x4 pose) each.
+def load_scene(name: str) -> list[tuple[str, Path, np.ndarray, bool]]:
+    """Static bodies of scene `name` from config/scenes/<name>.yaml: (body name, STL path, 4x4 pose, collide) each.
+
+    A body's optional `collide` key (default true) set to false makes it visual only.
 
     Raises:
-        ConfigError: unknown scene (lists the choices) or a missing mesh file.
+        ConfigError: unknown scene (lists the choices), a missing mesh file or a non-boolean `collide`.
     """
     scenes = config_dir() / 'scenes'
     choices = sorted(p.stem for p in scenes.glob('*.yaml'))
@@ -48,5 +50,9 @@ def load_scene(name: str) -> list[tuple[str, Path, np.ndarray]]:
         mesh = (config_dir().parent / body['mesh']).resolve()
         if not mesh.is_file():
             raise ConfigError(f"scene '{name}': mesh '{body['mesh']}' of body '{body['name']}' not found at {mesh}")
-        bodies.append((body['name'], mesh, pose_matrix(body['pose']['xyz'], body['pose']['rpy'])))
+        collide = body.get('collide', True)
+        if not isinstance(collide, bool):
+            raise ConfigError(f"scene '{name}': 'collide' of body '{body['name']}' must be true or false, "
+                              f'got {collide!r}')
+        bodies.append((body['name'], mesh, pose_matrix(body['pose']['xyz'], body['pose']['rpy']), collide))
     return bodies

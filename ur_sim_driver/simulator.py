@@ -34,8 +34,8 @@ class Simulator:
         substeps = cfg.physics_substeps or max(1, math.ceil(self.control_dt / MAX_PHYSICS_STEP - 1e-9))
         xml = build_mjcf(self.params, tf_prefix=cfg.tf_prefix, tool=tool, timestep=self.control_dt / substeps)
         if cfg.scene != 'empty':
-            for name, mesh, pose in load_scene(cfg.scene):
-                xml = add_static_mesh(xml, name, mesh, pose)
+            for name, mesh, pose, collide in load_scene(cfg.scene):
+                xml = add_static_mesh(xml, name, mesh, pose, collide=collide)
         self.mjcf = xml
         self.urdf = build_urdf(self.params, tf_prefix=cfg.tf_prefix, tool=tool)
         pre = cfg.tf_prefix

@@ -141,12 +141,15 @@ def build_mjcf(params: URParams, tf_prefix: str = '', tool: ToolDef | None = Non
     return ET.tostring(root, encoding='unicode') + '\n'
 
 
-def add_static_mesh(mjcf_xml: str, name: str, stl_path: str | Path, pose: np.ndarray) -> str:
-    """Return ``mjcf_xml`` with a fixed, collidable body ``name`` showing the STL mesh at
-    ``stl_path`` (units [m]) placed at ``pose`` (4, 4) in the world.
+def add_static_mesh(mjcf_xml: str, name: str, stl_path: str | Path, pose: np.ndarray,
+                    collide: bool = True) -> str:
+    """Return ``mjcf_xml`` with a fixed body ``name`` showing the STL mesh at ``stl_path``
+    (units [m]) placed at ``pose`` (4, 4) in the world. The geom (also named ``name``) collides
+    with the robot unless ``collide`` is False (contype = conaffinity = 0: visual only).
 
     Note: MuJoCo collides a mesh as its convex hull, so a strongly curved (concave) part
-    should be added as several convex pieces.
+    should be added as several convex pieces (e.g. the windshield's ``windshield_piece_XX``),
+    with the whole mesh added with ``collide=False`` for display.
     """
     path = Path(stl_path).resolve()
     if not path.is_file():
@@ -170,7 +173,8 @@ def add_static_mesh(mjcf_xml: str, name: str, stl_path: str | Path, pose: np.nda
     if world is None:
         raise ConfigError('mjcf_xml has no <worldbody>')
     body = ET.SubElement(world, 'body', name=name, **pos_quat)
-    ET.SubElement(body, 'geom', name=name, type='mesh', mesh=name, contype=_ENV_BITS[0],
-                  conaffinity=_ENV_BITS[1], rgba='0.55 0.75 0.9 0.6')
+    contype, conaffinity = _ENV_BITS if collide else ('0', '0')
+    ET.SubElement(body, 'geom', name=name, type='mesh', mesh=name, contype=contype,
+                  conaffinity=conaffinity, rgba='0.55 0.75 0.9 0.6')
     ET.indent(root)
     return ET.tostring(root, encoding='unicode') + '\n'
