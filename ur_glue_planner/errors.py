@@ -14,3 +14,7 @@ class JobError(GluePlannerError):
 
 class PlanningError(GluePlannerError):
     """Path, IK or timing could not be computed within the limits."""
+
+
+class ClientError(GluePlannerError):
+    """A ROS interaction of the client API failed (server missing, goal rejected, timeout)."""

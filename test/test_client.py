@@ -1,0 +1,77 @@
+"""The script client API against an in-process ur_sim (seed 2 preset names)."""
+import numpy as np
+import pytest
+from sim_harness import running_sim, wait_for
+
+from ur_glue_planner.client import URClient
+from ur_glue_planner.errors import ClientError
+
+PRESET = dict(ur_type='ur10', namespace='/ur10', controller_name='vel_based_pos_traj_controller',
+              initial_positions=[0.0] * 6)
+
+
+@pytest.fixture(scope='module')
+def sim_and_client():
+    with running_sim(**PRESET) as h:
+        client = URClient(namespace='/ur10', controller_name='vel_based_pos_traj_controller',
+                          context=h.client.context, node_name='test_ur_client')
+        try:
+            yield h, client
+        finally:
+            client.close()
+
+
+def test_server_not_found_names_the_action_and_timeout(sim_and_client):
+    h, _ = sim_and_client
+    with pytest.raises(ClientError, match=r'/nowhere/scaled_joint_trajectory_controller/follow_joint_trajectory '
+                                          r'not found within 0.5 s'):
+        URClient(namespace='/nowhere', timeout=0.5, context=h.client.context, node_name='lost_client')
+
+
+def test_joint_state_and_blocking_move(sim_and_client):
+    h, ur = sim_and_client
+    state = ur.joint_state()
+    assert state.names == tuple(h.joints) and state.q.shape == (6,)
+    target = state.q + np.array([0.2, -0.1, 0.1, 0.0, 0.1, 0.0])
+    outcome = ur.send_joint_configuration(target, end_time=1.0)
+    assert outcome.succeeded, outcome
+    assert np.abs(h.q - target).max() < 0.02
+
+
+def test_non_blocking_goal_gives_feedback_and_cancels(sim_and_client):
+    h, ur = sim_and_client
+    q0 = ur.joint_state().q
+    seen = []
+    goal = ur.send_joint_configuration(q0 + np.array([0.8, 0, 0, 0, 0, 0]), end_time=4.0, wait=False,
+                                       feedback_callback=seen.append)
+    wait_for(lambda: len(seen) >= 3, what='feedback')
+    assert goal.feedback is not None and len(goal.feedback.actual.positions) == 6
+    goal.cancel()
+    outcome = goal.wait(timeout=30)
+    assert outcome.status == 'canceled'
+
+
+def test_rejected_goal_raises_with_the_servers_reason(sim_and_client):
+    _, ur = sim_and_client
+    q = ur.joint_state().q.copy()
+    q[2] = 4.0  # elbow limit is +-pi
+    with pytest.raises(ClientError, match=r'goal rejected by .*elbow_joint.*outside the joint limits'):
+        ur.send_joint_configuration(q, end_time=1.0)
+
+
+def test_too_tight_goal_tolerance_gives_goal_tolerance_violated(sim_and_client):
+    _, ur = sim_and_client
+    q0 = ur.joint_state().q
+    outcome = ur.follow_trajectory(q0[None, :] + 0.05, np.zeros((1, 6)), None, [0.5],
+                                   goal_tolerance=ur.tolerances(1e-9), goal_time_tolerance=0.01)
+    assert outcome.error_code == -5 and outcome.status == 'aborted'
+
+
+def test_topic_and_recording(sim_and_client):
+    h, ur = sim_and_client
+    q0 = ur.joint_state().q
+    ur.publish_trajectory([1.0], (q0 - 0.1)[None, :], np.zeros((1, 6)))
+    rec = ur.record(duration=0.5, rate=50.0)
+    assert rec.q.shape == (25, 6) and np.all(np.diff(rec.t) >= 0)
+    h.wait_sim_time(1.5)
+    assert np.abs(ur.joint_state().q - (q0 - 0.1)).max() < 0.01

@@ -1,0 +1,263 @@
+"""A small client API over rclpy for scripts: the UR driver's interfaces without launch files or MATLAB.
+
+In the spirit of MATLAB's ``universalrobot``: connect, read the joint state, send a trajectory on the topic,
+send a goal through FollowJointTrajectory (blocking, or with a handle for feedback, cancel and wait), record
+joint states, and solve IK. It works against ur_sim and against the real UR driver: it uses only their ROS
+interfaces. Like node.py, this module is a ROS boundary; the rest of ur_glue_planner is pure.
+
+Example:
+    with URClient(namespace='/ur10', controller_name='vel_based_pos_traj_controller') as ur:
+        q = ur.joint_state().q
+        outcome = ur.send_joint_configuration(q + 0.1, end_time=2.0)
+"""
+from __future__ import annotations
+
+import threading
+import time
+from collections.abc import Callable, Sequence
+from dataclasses import dataclass
+
+import numpy as np
+import rclpy
+from action_msgs.msg import GoalStatus
+from control_msgs.action import FollowJointTrajectory
+from control_msgs.msg import JointTolerance
+from rcl_interfaces.msg import Log
+from rclpy.action import ActionClient
+from rclpy.context import Context
+from rclpy.executors import SingleThreadedExecutor
+from rclpy.node import Node
+from rclpy.qos import QoSProfile
+from sensor_msgs.msg import JointState
+
+from ur_glue_planner import ros_conversions as conv
+from ur_glue_planner.errors import ClientError
+
+DEFAULT_CONTROLLER = 'scaled_joint_trajectory_controller'
+STATUS_NAMES = {GoalStatus.STATUS_SUCCEEDED: 'succeeded', GoalStatus.STATUS_ABORTED: 'aborted',
+                GoalStatus.STATUS_CANCELED: 'canceled'}
+
+
+@dataclass(frozen=True)
+class JointStateSample:
+    """One /joint_states message: stamp t [s], names, q [rad], qd [rad/s], effort [N m] (arrays (n,))."""
+
+    t: float
+    names: tuple[str, ...]
+    q: np.ndarray
+    qd: np.ndarray
+    effort: np.ndarray
+
+
+@dataclass(frozen=True)
+class GoalOutcome:
+    """How a FollowJointTrajectory goal ended: the control_msgs error code and string, and the goal status."""
+
+    error_code: int
+    error_string: str
+    status: str
+
+    @property
+    def succeeded(self) -> bool:
+        return self.status == 'succeeded' and self.error_code == FollowJointTrajectory.Result.SUCCESSFUL
+
+
+@dataclass(frozen=True)
+class Recording:
+    """Joint states sampled at a fixed rate: t (K,) [s, message stamps], q, qd, effort (K, n)."""
+
+    t: np.ndarray
+    q: np.ndarray
+    qd: np.ndarray
+    effort: np.ndarray
+
+
+def _wait(condition: Callable[[], bool], timeout: float, what: str) -> None:
+    deadline = time.monotonic() + timeout
+    while not condition():
+        if time.monotonic() > deadline:
+            raise ClientError(f'{what} within {timeout:.1f} s')
+        time.sleep(0.001)
+
+
+class TrajectoryGoal:
+    """An accepted goal: latest feedback, cancel() and wait()."""
+
+    def __init__(self, handle, on_feedback: Callable | None) -> None:
+        self._handle = handle
+        self._result_future = handle.get_result_async()
+        self.feedback = None
+        self._on_feedback = on_feedback
+
+    def _feedback(self, msg) -> None:
+        self.feedback = msg.feedback
+        if self._on_feedback is not None:
+            self._on_feedback(msg.feedback)
+
+    @property
+    def done(self) -> bool:
+        return self._result_future.done()
+
+    def cancel(self, timeout: float = 5.0) -> None:
+        """Ask the server to cancel; the robot stops and holds (the result then says canceled)."""
+        future = self._handle.cancel_goal_async()
+        _wait(future.done, timeout, 'no answer to the cancel request')
+
+    def wait(self, timeout: float | None = None) -> GoalOutcome:
+        """Block until the goal ends (timeout [s] of wall time, None = no limit) and return its outcome."""
+        _wait(self._result_future.done, float('inf') if timeout is None else timeout, 'the goal did not end')
+        r = self._result_future.result()
+        return GoalOutcome(r.result.error_code, r.result.error_string, STATUS_NAMES.get(r.status, str(r.status)))
+
+
+class URClient:
+    """Connection to a UR driver (or ur_sim): joint states, the trajectory topic and the FollowJointTrajectory action.
+
+    Args:
+        namespace: prefix of every interface name, e.g. '/ur10'.
+        controller_name: the trajectory controller, e.g. 'scaled_joint_trajectory_controller'.
+        timeout: how long to wait for the action server and the first joint state [s].
+        context: an initialised rclpy Context; a private one is created (and shut down by close()) when None.
+    """
+
+    def __init__(self, namespace: str = '', controller_name: str = DEFAULT_CONTROLLER, timeout: float = 10.0,
+                 context: Context | None = None, node_name: str = 'ur_client') -> None:
+        self._own_context = context is None
+        if context is None:
+            context = Context()
+            rclpy.init(context=context)
+        self.context = context
+        ns = namespace.strip('/')
+        prefix = f'/{ns}' if ns else ''
+        self.action_name = f'{prefix}/{controller_name}/follow_joint_trajectory'
+        self.node = Node(node_name, context=context)
+        self._latest: JointStateSample | None = None
+        self._state_lock = threading.Lock()
+        self._errors: list[tuple[float, str]] = []
+        self.node.create_subscription(JointState, f'{prefix}/joint_states', self._on_joint_state, QoSProfile(depth=10))
+        self.node.create_subscription(Log, '/rosout', self._on_log, QoSProfile(depth=50))
+        self._topic = self.node.create_publisher(conv.JointTrajectory, f'{prefix}/{controller_name}/joint_trajectory',
+                                                 10)
+        self._action = ActionClient(self.node, FollowJointTrajectory, self.action_name)
+        self._executor = SingleThreadedExecutor(context=context)
+        self._executor.add_node(self.node)
+        self._thread = threading.Thread(target=self._executor.spin, daemon=True)
+        self._thread.start()
+        try:
+            _wait(self._action.server_is_ready, timeout, f'FollowJointTrajectory server {self.action_name} not found')
+            _wait(lambda: self._latest is not None, timeout, f'no joint states on {prefix}/joint_states')
+            _wait(lambda: self._topic.get_subscription_count() > 0, timeout,
+                  f'no subscriber on {prefix}/{controller_name}/joint_trajectory')
+        except ClientError:
+            self.close()
+            raise
+        self.joint_names = self._latest.names
+
+    # ---- state -----------------------------------------------------------------------------------
+    def _on_joint_state(self, msg: JointState) -> None:
+        sample = JointStateSample(msg.header.stamp.sec + msg.header.stamp.nanosec * 1e-9, tuple(msg.name),
+                                  np.array(msg.position), np.array(msg.velocity), np.array(msg.effort))
+        with self._state_lock:
+            self._latest = sample
+
+    def _on_log(self, msg: Log) -> None:
+        if msg.level >= Log.ERROR:
+            self._errors.append((time.monotonic(), msg.msg))
+            del self._errors[:-20]
+
+    def joint_state(self) -> JointStateSample:
+        """The newest joint state received."""
+        with self._state_lock:
+            return self._latest
+
+    def record(self, duration: float, rate: float = 50.0) -> Recording:
+        """Sample the newest joint state every 1/rate [s] of wall time for `duration` [s] (seed 2: 50 Hz)."""
+        samples = []
+        period = 1.0 / rate
+        next_t = time.monotonic()
+        for _ in range(max(1, round(duration * rate))):
+            samples.append(self.joint_state())
+            next_t += period
+            time.sleep(max(0.0, next_t - time.monotonic()))
+        return Recording(np.array([s.t for s in samples]), np.array([s.q for s in samples]),
+                         np.array([s.qd for s in samples]), np.array([s.effort for s in samples]))
+
+    # ---- commands --------------------------------------------------------------------------------
+    def publish_trajectory(self, times: Sequence[float], q: np.ndarray, qd: np.ndarray | None = None,
+                           qdd: np.ndarray | None = None) -> None:
+        """Send a JointTrajectory on the topic (fire and forget). q, qd, qdd: (N, n) [rad, rad/s, rad/s^2]."""
+        self._topic.publish(conv.joint_trajectory(self.joint_names, times, q, qd, qdd))
+
+    def send_joint_configuration(self, q: Sequence[float], end_time: float, wait: bool = True,
+                                 **kwargs) -> GoalOutcome | TrajectoryGoal:
+        """Move to configuration q (n,) [rad], arriving at rest after end_time [s], through the action."""
+        q = np.asarray(q, dtype=float)[None, :]
+        return self.follow_trajectory(q, np.zeros_like(q), None, [end_time], wait=wait, **kwargs)
+
+    def follow_trajectory(self, q: np.ndarray, qd: np.ndarray | None, qdd: np.ndarray | None,
+                          times: Sequence[float], path_tolerance: Sequence[JointTolerance] | None = None,
+                          goal_tolerance: Sequence[JointTolerance] | None = None, goal_time_tolerance: float = 0.0,
+                          wait: bool = True, feedback_callback: Callable | None = None,
+                          timeout: float = 10.0) -> GoalOutcome | TrajectoryGoal:
+        """Send a trajectory through FollowJointTrajectory.
+
+        Args:
+            q, qd, qdd: (N, n) positions [rad], velocities [rad/s] (or None), accelerations [rad/s^2] (or None).
+            times: (N,) time_from_start [s].
+            path_tolerance, goal_tolerance: control_msgs/JointTolerance lists (see `tolerances()`).
+            goal_time_tolerance: [s].
+            wait: block until the result (returns GoalOutcome), else return a TrajectoryGoal at once.
+            feedback_callback: called with each FollowJointTrajectory.Feedback.
+            timeout: for the goal response [s].
+
+        Raises:
+            ClientError: the goal was rejected (with the server's logged reason when it gave one) or not answered.
+        """
+        goal = FollowJointTrajectory.Goal()
+        goal.trajectory = conv.joint_trajectory(self.joint_names, times, np.atleast_2d(q), qd, qdd)
+        goal.path_tolerance = list(path_tolerance or [])
+        goal.goal_tolerance = list(goal_tolerance or [])
+        goal.goal_time_tolerance = conv.duration(goal_time_tolerance)
+        holder: list[TrajectoryGoal] = []
+        sent_at = time.monotonic()
+        future = self._action.send_goal_async(
+            goal, feedback_callback=lambda msg: holder and holder[0]._feedback(msg))
+        _wait(future.done, timeout, f'no answer to the goal from {self.action_name}')
+        handle = future.result()
+        if not handle.accepted:
+            raise ClientError(f'goal rejected by {self.action_name}: {self._rejection_reason(sent_at)}')
+        holder.append(TrajectoryGoal(handle, feedback_callback))
+        return holder[0].wait() if wait else holder[0]
+
+    def _rejection_reason(self, since: float) -> str:
+        # rclpy's goal response carries no reason; the server logs it (ur_sim and the UR driver both do).
+        deadline = time.monotonic() + 0.5
+        while time.monotonic() < deadline:
+            reasons = [m for t, m in self._errors if t >= since - 0.05]
+            if reasons:
+                return reasons[-1]
+            time.sleep(0.01)
+        return 'the server gave no reason on /rosout'
+
+    def tolerances(self, position: Sequence[float] | float, velocity: Sequence[float] | float = 0.0,
+                   acceleration: Sequence[float] | float = 0.0) -> list[JointTolerance]:
+        """JointTolerance per joint (>0 sets, 0 keeps the controller default, -1 disables the check)."""
+        n = len(self.joint_names)
+        pos, vel, acc = (np.broadcast_to(np.asarray(x, dtype=float), (n,)) for x in (position, velocity, acceleration))
+        return [JointTolerance(name=name, position=float(p), velocity=float(v), acceleration=float(a))
+                for name, p, v, a in zip(self.joint_names, pos, vel, acc)]
+
+    # ---- lifetime --------------------------------------------------------------------------------
+    def close(self) -> None:
+        """Stop spinning and release the node (and the private context)."""
+        self._executor.shutdown(timeout_sec=2.0)
+        self._thread.join(timeout=5.0)
+        self.node.destroy_node()
+        if self._own_context:
+            rclpy.try_shutdown(context=self.context)
+
+    def __enter__(self) -> URClient:
+        return self
+
+    def __exit__(self, *exc) -> None:
+        self.close()
