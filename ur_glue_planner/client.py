@@ -64,7 +64,7 @@ class GoalOutcome:
 
 @dataclass(frozen=True)
 class Recording:
-    """Joint states sampled at a fixed rate: t (K,) [s, message stamps], q, qd, effort (K, n)."""
+    """Joint states sampled at a fixed rate: t (K,) [s] from the first sample, q, qd, effort (K, n)."""
 
     t: np.ndarray
     q: np.ndarray
@@ -78,6 +78,30 @@ def _wait(condition: Callable[[], bool], timeout: float, what: str) -> None:
         if time.monotonic() > deadline:
             raise ClientError(f'{what} within {timeout:.1f} s')
         time.sleep(0.001)
+
+
+class JointStateRecorder:
+    """Joint states received while recording, resampled at a fixed rate of message time."""
+
+    def __init__(self, rate: float) -> None:
+        self.rate = rate
+        self.samples: list[JointStateSample] = []
+
+    def span(self) -> float:
+        """Message time covered so far [s]."""
+        return self.samples[-1].t - self.samples[0].t if len(self.samples) > 1 else 0.0
+
+    def resample(self, duration: float | None = None) -> Recording:
+        """Samples at t0 + k / rate: for each, the newest message at or before that time."""
+        if not self.samples:
+            raise ClientError('no joint states were received while recording')
+        stamps = np.array([s.t for s in self.samples])
+        end = stamps[-1] if duration is None else min(stamps[-1], stamps[0] + duration)
+        grid = stamps[0] + np.arange(int(np.floor((end - stamps[0]) * self.rate + 1e-9)) + 1) / self.rate
+        picks = np.searchsorted(stamps, grid + 1e-9, side='right') - 1
+        chosen = [self.samples[i] for i in picks]
+        return Recording(grid - grid[0], np.array([s.q for s in chosen]), np.array([s.qd for s in chosen]),
+                         np.array([s.effort for s in chosen]))
 
 
 class TrajectoryGoal:
@@ -134,6 +158,7 @@ class URClient:
         self._latest: JointStateSample | None = None
         self._state_lock = threading.Lock()
         self._errors: list[tuple[float, str]] = []
+        self._recorders: list[JointStateRecorder] = []
         self.node.create_subscription(JointState, f'{prefix}/joint_states', self._on_joint_state, QoSProfile(depth=10))
         self.node.create_subscription(Log, '/rosout', self._on_log, QoSProfile(depth=50))
         self._topic = self.node.create_publisher(conv.JointTrajectory, f'{prefix}/{controller_name}/joint_trajectory',
@@ -159,6 +184,8 @@ class URClient:
                                   np.array(msg.position), np.array(msg.velocity), np.array(msg.effort))
         with self._state_lock:
             self._latest = sample
+        for recorder in list(self._recorders):
+            recorder.samples.append(sample)
 
     def _on_log(self, msg: Log) -> None:
         if msg.level >= Log.ERROR:
@@ -170,17 +197,22 @@ class URClient:
         with self._state_lock:
             return self._latest
 
-    def record(self, duration: float, rate: float = 50.0) -> Recording:
-        """Sample the newest joint state every 1/rate [s] of wall time for `duration` [s] (seed 2: 50 Hz)."""
-        samples = []
-        period = 1.0 / rate
-        next_t = time.monotonic()
-        for _ in range(max(1, round(duration * rate))):
-            samples.append(self.joint_state())
-            next_t += period
-            time.sleep(max(0.0, next_t - time.monotonic()))
-        return Recording(np.array([s.t for s in samples]), np.array([s.q for s in samples]),
-                         np.array([s.qd for s in samples]), np.array([s.effort for s in samples]))
+    def start_recording(self, rate: float = 50.0) -> JointStateRecorder:
+        """Record joint states from now on, resampled at `rate` [Hz] of message time (seed 2: 50 Hz)."""
+        recorder = JointStateRecorder(rate)
+        self._recorders.append(recorder)
+        return recorder
+
+    def record(self, duration: float, rate: float = 50.0, timeout: float | None = None) -> Recording:
+        """Record for `duration` [s] of message (robot) time, sampled at `rate` [Hz]; blocks until done."""
+        recorder = self.start_recording(rate)
+        _wait(lambda: recorder.span() >= duration, timeout or duration * 10 + 10.0, 'recording did not finish')
+        return self.stop_recording(recorder, duration)
+
+    def stop_recording(self, recorder: JointStateRecorder, duration: float | None = None) -> Recording:
+        """Stop `recorder` and return its samples (the first `duration` [s] when given)."""
+        self._recorders.remove(recorder)
+        return recorder.resample(duration)
 
     # ---- commands --------------------------------------------------------------------------------
     def publish_trajectory(self, times: Sequence[float], q: np.ndarray, qd: np.ndarray | None = None,
