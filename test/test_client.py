@@ -7,7 +7,7 @@ from ur_glue_planner.client import URClient
 from ur_glue_planner.errors import ClientError
 
 PRESET = dict(ur_type='ur10', namespace='/ur10', controller_name='vel_based_pos_traj_controller',
-              initial_positions=[0.0] * 6)
+              initial_positions=[0.0] * 6, base_pose=[0.0, 0.0, 1.0, 0.0, 0.0, 0.0])
 
 
 @pytest.fixture(scope='module')
@@ -72,7 +72,7 @@ def test_topic_and_recording(sim_and_client):
     q0 = ur.joint_state().q
     ur.publish_trajectory([1.0], (q0 - 0.1)[None, :], np.zeros((1, 6)))
     rec = ur.record(duration=0.5, rate=50.0)
-    assert rec.q.shape == (26, 6)
+    assert rec.q.shape == (25, 6)  # N = duration x rate, as the seed counts
     assert np.allclose(np.diff(rec.t), 0.02)
     assert abs(rec.q[-1, 0] - rec.q[0, 0]) > 0.01  # it recorded the motion
     h.wait_sim_time(1.5)

@@ -27,11 +27,13 @@ from rclpy.action import ActionClient
 from rclpy.context import Context
 from rclpy.executors import SingleThreadedExecutor
 from rclpy.node import Node
-from rclpy.qos import QoSProfile
+from rclpy.qos import DurabilityPolicy, QoSProfile
 from sensor_msgs.msg import JointState
+from std_msgs.msg import String
 
 from ur_glue_planner import ros_conversions as conv
 from ur_glue_planner.errors import ClientError
+from ur_glue_planner.kinematics import IkResult, Kinematics
 
 DEFAULT_CONTROLLER = 'scaled_joint_trajectory_controller'
 STATUS_NAMES = {GoalStatus.STATUS_SUCCEEDED: 'succeeded', GoalStatus.STATUS_ABORTED: 'aborted',
@@ -83,22 +85,30 @@ def _wait(condition: Callable[[], bool], timeout: float, what: str) -> None:
 class JointStateRecorder:
     """Joint states received while recording, resampled at a fixed rate of message time."""
 
-    def __init__(self, rate: float) -> None:
+    def __init__(self, rate: float, t0: float | None = None) -> None:
         self.rate = rate
+        self.t0 = t0
         self.samples: list[JointStateSample] = []
 
+    def start(self) -> float:
+        """Time of sample 0 [s]: the given t0, else the first message's stamp."""
+        return self.t0 if self.t0 is not None else self.samples[0].t
+
     def span(self) -> float:
-        """Message time covered so far [s]."""
-        return self.samples[-1].t - self.samples[0].t if len(self.samples) > 1 else 0.0
+        """Message time covered so far from the start [s]."""
+        return self.samples[-1].t - self.start() if self.samples else 0.0
 
     def resample(self, duration: float | None = None) -> Recording:
-        """Samples at t0 + k / rate: for each, the newest message at or before that time."""
+        """Samples at start + k / rate, k < duration x rate (the seed's N = tf x rate): for each, the newest
+        message at or before that time."""
         if not self.samples:
             raise ClientError('no joint states were received while recording')
         stamps = np.array([s.t for s in self.samples])
-        end = stamps[-1] if duration is None else min(stamps[-1], stamps[0] + duration)
-        grid = stamps[0] + np.arange(int(np.floor((end - stamps[0]) * self.rate + 1e-9)) + 1) / self.rate
-        picks = np.searchsorted(stamps, grid + 1e-9, side='right') - 1
+        t0 = self.start()
+        covered = int(np.floor((stamps[-1] - t0) * self.rate + 1e-9)) + 1
+        count = covered if duration is None else min(covered, round(duration * self.rate))
+        grid = t0 + np.arange(count) / self.rate
+        picks = np.maximum(np.searchsorted(stamps, grid + 1e-9, side='right') - 1, 0)
         chosen = [self.samples[i] for i in picks]
         return Recording(grid - grid[0], np.array([s.q for s in chosen]), np.array([s.qd for s in chosen]),
                          np.array([s.effort for s in chosen]))
@@ -153,14 +163,20 @@ class URClient:
         self.context = context
         ns = namespace.strip('/')
         prefix = f'/{ns}' if ns else ''
+        self._prefix = prefix
         self.action_name = f'{prefix}/{controller_name}/follow_joint_trajectory'
         self.node = Node(node_name, context=context)
         self._latest: JointStateSample | None = None
         self._state_lock = threading.Lock()
         self._errors: list[tuple[float, str]] = []
+        self._urdf: str | None = None
         self._recorders: list[JointStateRecorder] = []
         self.node.create_subscription(JointState, f'{prefix}/joint_states', self._on_joint_state, QoSProfile(depth=10))
         self.node.create_subscription(Log, '/rosout', self._on_log, QoSProfile(depth=50))
+        # Subscribed for the client's lifetime: destroying entities under a spinning executor races in rclpy.
+        latched = QoSProfile(depth=1, durability=DurabilityPolicy.TRANSIENT_LOCAL)
+        self.node.create_subscription(String, f'{prefix}/robot_description',
+                                      lambda m: setattr(self, '_urdf', m.data), latched)
         self._topic = self.node.create_publisher(conv.JointTrajectory, f'{prefix}/{controller_name}/joint_trajectory',
                                                  10)
         self._action = ActionClient(self.node, FollowJointTrajectory, self.action_name)
@@ -197,16 +213,22 @@ class URClient:
         with self._state_lock:
             return self._latest
 
-    def start_recording(self, rate: float = 50.0) -> JointStateRecorder:
-        """Record joint states from now on, resampled at `rate` [Hz] of message time (seed 2: 50 Hz)."""
-        recorder = JointStateRecorder(rate)
+    def start_recording(self, rate: float = 50.0, t0: float | None = None) -> JointStateRecorder:
+        """Record joint states from now on, resampled at `rate` [Hz] of message time (seed 2: 50 Hz).
+
+        Args:
+            rate: sampling rate [Hz].
+            t0: robot time [s] of sample 0 (e.g. a trajectory's start stamp); default: the first message.
+        """
+        recorder = JointStateRecorder(rate, t0)
         self._recorders.append(recorder)
         return recorder
 
     def record(self, duration: float, rate: float = 50.0, timeout: float | None = None) -> Recording:
         """Record for `duration` [s] of message (robot) time, sampled at `rate` [Hz]; blocks until done."""
         recorder = self.start_recording(rate)
-        _wait(lambda: recorder.span() >= duration, timeout or duration * 10 + 10.0, 'recording did not finish')
+        _wait(lambda: recorder.span() >= duration - 1.0 / rate, timeout or duration * 10 + 10.0,
+              'recording did not finish')
         return self.stop_recording(recorder, duration)
 
     def stop_recording(self, recorder: JointStateRecorder, duration: float | None = None) -> Recording:
@@ -214,11 +236,43 @@ class URClient:
         self._recorders.remove(recorder)
         return recorder.resample(duration)
 
+    def sleep(self, duration: float, timeout: float | None = None) -> None:
+        """Wait `duration` [s] of robot time (joint state stamps), which runs at any real-time factor."""
+        t_end = self.joint_state().t + duration
+        _wait(lambda: self.joint_state().t >= t_end, timeout or duration * 10 + 10.0, 'robot time did not advance')
+
+    # ---- kinematics ------------------------------------------------------------------------------
+    def robot_description(self, timeout: float = 10.0) -> str:
+        """The URDF on robot_description (transient local, as the UR driver and ur_sim publish it)."""
+        _wait(lambda: self._urdf is not None, timeout, f'no URDF on {self._prefix}/robot_description')
+        return self._urdf
+
+    def kinematics(self, frame: str = 'tool0', base_pose: np.ndarray | None = None) -> Kinematics:
+        """Pinocchio kinematics of `frame` from the robot's own URDF; base_pose (4, 4) places base_link in a world."""
+        return Kinematics(self.robot_description(), self.joint_names, frame, base_pose=base_pose)
+
+    def ik(self, target: np.ndarray, q0: Sequence[float] | None = None, frame: str = 'tool0',
+           weights: Sequence[float] | None = None, base_pose: np.ndarray | None = None) -> IkResult:
+        """Joint positions putting `frame` at `target` (4, 4) [m]; q0 defaults to the current joint state."""
+        kin = self.kinematics(frame, base_pose)
+        q_start = self.joint_state().q if q0 is None else np.asarray(q0, dtype=float)
+        return kin.ik(np.asarray(target, dtype=float), q_start, None if weights is None else np.asarray(weights))
+
     # ---- commands --------------------------------------------------------------------------------
     def publish_trajectory(self, times: Sequence[float], q: np.ndarray, qd: np.ndarray | None = None,
-                           qdd: np.ndarray | None = None) -> None:
-        """Send a JointTrajectory on the topic (fire and forget). q, qd, qdd: (N, n) [rad, rad/s, rad/s^2]."""
-        self._topic.publish(conv.joint_trajectory(self.joint_names, times, q, qd, qdd))
+                           qdd: np.ndarray | None = None, start_time: float = 0.0) -> None:
+        """Send a JointTrajectory on the topic (fire and forget).
+
+        Args:
+            times: (N,) time_from_start [s].
+            q, qd, qdd: (N, n) [rad, rad/s, rad/s^2]; qd and qdd may be None.
+            start_time: header.stamp in robot time [s] (see `now()`); 0 starts on arrival.
+        """
+        self._topic.publish(conv.joint_trajectory(self.joint_names, times, q, qd, qdd, start_time))
+
+    def now(self) -> float:
+        """Robot time [s]: the newest joint state's stamp (simulated time on ur_sim)."""
+        return self.joint_state().t
 
     def send_joint_configuration(self, q: Sequence[float], end_time: float, wait: bool = True,
                                  **kwargs) -> GoalOutcome | TrajectoryGoal:
@@ -230,7 +284,7 @@ class URClient:
                           times: Sequence[float], path_tolerance: Sequence[JointTolerance] | None = None,
                           goal_tolerance: Sequence[JointTolerance] | None = None, goal_time_tolerance: float = 0.0,
                           wait: bool = True, feedback_callback: Callable | None = None,
-                          timeout: float = 10.0) -> GoalOutcome | TrajectoryGoal:
+                          timeout: float = 10.0, start_time: float = 0.0) -> GoalOutcome | TrajectoryGoal:
         """Send a trajectory through FollowJointTrajectory.
 
         Args:
@@ -241,12 +295,13 @@ class URClient:
             wait: block until the result (returns GoalOutcome), else return a TrajectoryGoal at once.
             feedback_callback: called with each FollowJointTrajectory.Feedback.
             timeout: for the goal response [s].
+            start_time: header.stamp in robot time [s] (see `now()`); 0 starts on arrival.
 
         Raises:
             ClientError: the goal was rejected (with the server's logged reason when it gave one) or not answered.
         """
         goal = FollowJointTrajectory.Goal()
-        goal.trajectory = conv.joint_trajectory(self.joint_names, times, np.atleast_2d(q), qd, qdd)
+        goal.trajectory = conv.joint_trajectory(self.joint_names, times, np.atleast_2d(q), qd, qdd, start_time)
         goal.path_tolerance = list(path_tolerance or [])
         goal.goal_tolerance = list(goal_tolerance or [])
         goal.goal_time_tolerance = conv.duration(goal_time_tolerance)

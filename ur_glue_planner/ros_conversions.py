@@ -4,7 +4,7 @@ from __future__ import annotations
 from collections.abc import Sequence
 
 import numpy as np
-from builtin_interfaces.msg import Duration
+from builtin_interfaces.msg import Duration, Time
 from trajectory_msgs.msg import JointTrajectory, JointTrajectoryPoint
 
 
@@ -14,11 +14,18 @@ def duration(t: float) -> Duration:
     return Duration(sec=ns // 1_000_000_000, nanosec=ns % 1_000_000_000)
 
 
+def stamp(t: float) -> Time:
+    """[s] -> builtin_interfaces/Time."""
+    ns = max(0, round(t * 1e9))
+    return Time(sec=ns // 1_000_000_000, nanosec=ns % 1_000_000_000)
+
+
 def joint_trajectory(names: Sequence[str], times: Sequence[float], q: np.ndarray, qd: np.ndarray | None = None,
-                     qdd: np.ndarray | None = None) -> JointTrajectory:
-    """A JointTrajectory (header stamp 0 = start on arrival) from (N, n) arrays and (N,) times [s]."""
+                     qdd: np.ndarray | None = None, start_time: float = 0.0) -> JointTrajectory:
+    """A JointTrajectory from (N, n) arrays and (N,) times [s]; header stamp `start_time` [s] (0 = on arrival)."""
     q = np.atleast_2d(np.asarray(q, dtype=float))
     msg = JointTrajectory(joint_names=list(names))
+    msg.header.stamp = stamp(start_time)
     for k, t in enumerate(times):
         p = JointTrajectoryPoint(positions=q[k].tolist(), time_from_start=duration(float(t)))
         if qd is not None:

@@ -42,6 +42,7 @@ class SimConfig:
     real_time_factor: float = 1.0
     tool: str = 'none'
     scene: str = 'empty'
+    base_pose: tuple[float, ...] = (0.0, 0.0, 0.0, 0.0, 0.0, 0.0)
     viewer: bool = False
     stopped_velocity_tolerance: float = 0.2
     goal_time: float = 0.0
@@ -98,6 +99,10 @@ def sim_config_from_params(params: Mapping[str, Any]) -> SimConfig:
             trajectory=_number(f'constraints.{j}.trajectory', get(f'constraints.{j}.trajectory', 0.2), 0.0, 10.0),
             goal=_number(f'constraints.{j}.goal', get(f'constraints.{j}.goal', 0.1), 0.0, 10.0),
         ))
+    base_pose = tuple(float(x) for x in get('base_pose', d.base_pose))
+    if len(base_pose) != 6 or not all(math.isfinite(x) for x in base_pose):
+        raise ConfigError(f"parameter 'base_pose' = {list(base_pose)!r} must be 6 finite numbers "
+                          '[x, y, z [m], roll, pitch, yaw [rad]]')
     update_rate = _number('update_rate', get('update_rate', d.update_rate), 0.0, 5000.0)
     if 0.0 < update_rate < 10.0:
         raise ConfigError(f"parameter 'update_rate' = {update_rate} is outside the allowed range: 0 (type default) "
@@ -122,6 +127,7 @@ def sim_config_from_params(params: Mapping[str, Any]) -> SimConfig:
         real_time_factor=_number('real_time_factor', get('real_time_factor', d.real_time_factor), 0.0, 100.0),
         tool=_choice('tool', get('tool', d.tool), TOOLS),
         scene=_choice('scene', get('scene', d.scene), SCENES),
+        base_pose=base_pose,
         viewer=bool(get('viewer', d.viewer)),
         stopped_velocity_tolerance=_number('constraints.stopped_velocity_tolerance',
                                            get('constraints.stopped_velocity_tolerance', 0.2), 0.0, 10.0),

@@ -12,7 +12,7 @@ from ur_sim_driver.description.tool import get_tool
 from ur_sim_driver.description.urdf import build_urdf
 from ur_sim_driver.errors import ConfigError
 from ur_sim_driver.physics import ArmPhysics, ArmState
-from ur_sim_driver.scene import load_scene
+from ur_sim_driver.scene import load_scene, pose_matrix
 from ur_sim_driver.sim_config import SimConfig
 from ur_sim_driver.torque_control import PdGains, computed_torque
 from ur_sim_driver.trajectory import TrajectorySample
@@ -32,7 +32,10 @@ class Simulator:
         self.control_rate = cfg.update_rate or self.params.control_rate
         self.control_dt = 1.0 / self.control_rate
         substeps = cfg.physics_substeps or max(1, math.ceil(self.control_dt / MAX_PHYSICS_STEP - 1e-9))
-        xml = build_mjcf(self.params, tf_prefix=cfg.tf_prefix, tool=tool, timestep=self.control_dt / substeps)
+        # The mount only places the arm in the MuJoCo world (floor, scene); interfaces stay in the base frames.
+        mount = pose_matrix(cfg.base_pose[:3], cfg.base_pose[3:]) if any(cfg.base_pose) else None
+        xml = build_mjcf(self.params, tf_prefix=cfg.tf_prefix, tool=tool, base_pose=mount,
+                         timestep=self.control_dt / substeps)
         if cfg.scene != 'empty':
             for name, mesh, pose, collide in load_scene(cfg.scene):
                 xml = add_static_mesh(xml, name, mesh, pose, collide=collide)
