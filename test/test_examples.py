@@ -28,8 +28,9 @@ def ur():
             client.close()
 
 
-def test_ik_reproduces_the_seed_answer(ur):
-    result = seed2_ik.run(ur)
+def test_ik_reproduces_the_seed_answer(ur, tmp_path):
+    result = seed2_ik.run(ur, tmp_path)
+    assert result['plots'][0].stat().st_size > 5_000
     assert result['max_difference'] < 1e-3
     # and the answer really is a solution: ee_link at the target in the seed's world
     kin = ur.kinematics('ee_link', seed.BASE_IN_WORLD)
@@ -56,9 +57,10 @@ def test_task12_stops_and_task14_passes_through_the_via_point(ur, tmp_path):
     assert stop['final_error'] < 0.01 and through['final_error'] < 0.01
 
 
-def test_blocking_action_succeeds_and_too_tight_tolerances_fail(ur):
-    assert seed2_action_blocking.run(ur, qtol=0.05)['outcome'].succeeded
-    outcome = seed2_action_blocking.run(ur, qtol=1e-7)['outcome']
+def test_blocking_action_succeeds_and_too_tight_tolerances_fail(ur, tmp_path):
+    ok = seed2_action_blocking.run(ur, tmp_path, qtol=0.05)
+    assert ok['outcome'].succeeded and all(p.is_file() for p in ok['plots'])
+    outcome = seed2_action_blocking.run(ur, tmp_path, qtol=1e-7)['outcome']
     assert outcome.status == 'aborted'
     assert outcome.error_code in (-4, -5)  # a 1e-7 rad tube is left at once (path) or never reached (goal)
 
