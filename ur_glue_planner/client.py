@@ -106,6 +106,9 @@ class JointStateRecorder:
         stamps = np.array([s.t for s in self.samples])
         t0 = self.start()
         covered = int(np.floor((stamps[-1] - t0) * self.rate + 1e-9)) + 1
+        if covered <= 0:
+            raise ClientError(f'no joint states at or after the recording start t0 = {t0:.3f} s '
+                              f'(newest stamp {stamps[-1]:.3f} s)')
         count = covered if duration is None else min(covered, round(duration * self.rate))
         grid = t0 + np.arange(count) / self.rate
         picks = np.maximum(np.searchsorted(stamps, grid + 1e-9, side='right') - 1, 0)
