@@ -22,7 +22,7 @@ def run(ur, out_dir=None, qtol: float = 0.05, qveltol: float = 0.5, qacctol: flo
     outcome = ur.follow_trajectory(np.vstack([q_target, seed.QF]), np.zeros((2, 6)), None, seed.VIA_TIMES,
                                    path_tolerance=tolerances, goal_tolerance=tolerances, goal_time_tolerance=0.010,
                                    start_time=t0)
-    ur.sleep(seed.T_OFFSET)  # also record how the robot holds after the result
+    ur.sleep(max(0.0, t0 - ur.now()) + seed.T_OFFSET)  # also record how the robot holds after the result
     rec = ur.stop_recording(recorder)
     pngs = []
     if out_dir is not None:

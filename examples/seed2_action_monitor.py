@@ -22,7 +22,7 @@ def run(ur, out_dir) -> dict:
                                 feedback_callback=lambda fb: feedback_errors.append(max(map(abs, fb.error.positions))))
     print('goal sent; the script keeps running while the robot moves')
     outcome = goal.wait()
-    ur.sleep(seed.T_OFFSET)
+    ur.sleep(max(0.0, t0 - ur.now()) + seed.T_OFFSET)
     rec = ur.stop_recording(recorder)
     pngs = plot_joint_states(rec.t, rec.q, rec.qd, ur.joint_names, out_dir, 'action_monitor',
                              'FollowJointTrajectory (non-blocking)')

@@ -54,12 +54,9 @@ def go_home(ur: URClient) -> None:
     ur.sleep(T_HOME + T_OFFSET)
 
 
-START_LEAD = 0.1  # [s] trajectories start this long after "now", so a recording can be anchored to their start
-
-
 def start_time(ur: URClient) -> float:
-    """A trajectory start stamp slightly in the future, in robot time [s]."""
-    return ur.now() + START_LEAD
+    """A trajectory start stamp slightly in the future, in robot time [s], so a recording can be anchored to it."""
+    return ur.start_time()
 
 
 def parse_args(description: str) -> argparse.Namespace:

@@ -16,7 +16,7 @@ def run(ur, out_dir) -> dict:
     t0 = seed.start_time(ur)
     recorder = ur.start_recording(seed.RATE, t0)
     ur.publish_trajectory([seed.T_TARGET], q_target[None, :], np.zeros((1, 6)), start_time=t0)
-    ur.sleep(seed.START_LEAD + seed.T_TARGET + seed.T_OFFSET)
+    ur.sleep(t0 - ur.now() + seed.T_TARGET + seed.T_OFFSET)
     rec = ur.stop_recording(recorder, seed.T_TARGET + seed.T_OFFSET)
     pngs = plot_joint_states(rec.t, rec.q, rec.qd, ur.joint_names, out_dir, 'topic_p2p', 'Point to point (topic)')
     error = float(np.abs(rec.q[-1] - q_target).max())

@@ -22,7 +22,7 @@ def run(ur, out_dir, task: str = '12') -> dict:
     recorder = ur.start_recording(seed.RATE, t0)
     ur.publish_trajectory(seed.VIA_TIMES, q_points, qvel, start_time=t0)
     duration = seed.VIA_TIMES[-1] + seed.T_OFFSET
-    ur.sleep(seed.START_LEAD + duration)
+    ur.sleep(t0 - ur.now() + duration)
     rec = ur.stop_recording(recorder, duration)
     pngs = plot_joint_states(rec.t, rec.q, rec.qd, ur.joint_names, out_dir, f'task{task}',
                              f'Task {task}: via points')

@@ -14,6 +14,7 @@ from __future__ import annotations
 
 import threading
 import time
+from collections import deque
 from collections.abc import Callable, Sequence
 from dataclasses import dataclass
 
@@ -98,6 +99,14 @@ class JointStateRecorder:
         """Message time covered so far from the start [s]."""
         return self.samples[-1].t - self.start() if self.samples else 0.0
 
+    def raw(self) -> Recording:
+        """Every message received, t relative to the start [s] (messages before the start included, t < 0)."""
+        if not self.samples:
+            raise ClientError('no joint states were received while recording')
+        t0 = self.start()
+        return Recording(np.array([s.t - t0 for s in self.samples]), np.array([s.q for s in self.samples]),
+                         np.array([s.qd for s in self.samples]), np.array([s.effort for s in self.samples]))
+
     def resample(self, duration: float | None = None) -> Recording:
         """Samples at start + k / rate, k < duration x rate (the seed's N = tf x rate): for each, the newest
         message at or before that time."""
@@ -174,6 +183,7 @@ class URClient:
         self._errors: list[tuple[float, str]] = []
         self._urdf: str | None = None
         self._recorders: list[JointStateRecorder] = []
+        self._history: deque[tuple[float, float]] = deque(maxlen=100)  # (wall, stamp) of recent joint states
         self.node.create_subscription(JointState, f'{prefix}/joint_states', self._on_joint_state, QoSProfile(depth=10))
         self.node.create_subscription(Log, '/rosout', self._on_log, QoSProfile(depth=50))
         # Subscribed for the client's lifetime: destroying entities under a spinning executor races in rclpy.
@@ -203,6 +213,9 @@ class URClient:
                                   np.array(msg.position), np.array(msg.velocity), np.array(msg.effort))
         with self._state_lock:
             self._latest = sample
+            wall = time.monotonic()
+            if not self._history or wall - self._history[-1][0] >= 0.01:  # ~1 s of history at any message rate
+                self._history.append((wall, sample.t))
         for recorder in list(self._recorders):
             recorder.samples.append(sample)
 
@@ -234,10 +247,12 @@ class URClient:
               'recording did not finish')
         return self.stop_recording(recorder, duration)
 
-    def stop_recording(self, recorder: JointStateRecorder, duration: float | None = None) -> Recording:
-        """Stop `recorder` and return its samples (the first `duration` [s] when given)."""
+    def stop_recording(self, recorder: JointStateRecorder, duration: float | None = None,
+                       raw: bool = False) -> Recording:
+        """Stop `recorder` and return its samples at its rate (the first `duration` [s] when given), or every
+        message received (`raw`)."""
         self._recorders.remove(recorder)
-        return recorder.resample(duration)
+        return recorder.raw() if raw else recorder.resample(duration)
 
     def sleep(self, duration: float, timeout: float | None = None) -> None:
         """Wait `duration` [s] of robot time (joint state stamps), which runs at any real-time factor."""
@@ -276,6 +291,20 @@ class URClient:
     def now(self) -> float:
         """Robot time [s]: the newest joint state's stamp (simulated time on ur_sim)."""
         return self.joint_state().t
+
+    def time_rate(self) -> float:
+        """How fast robot time runs against the wall clock (1 on a real robot; higher on a fast simulation)."""
+        with self._state_lock:
+            history = list(self._history)
+        if len(history) < 2 or history[-1][0] - history[0][0] < 0.05:
+            return 1.0
+        (w0, t0), (w1, t1) = history[0], history[-1]
+        return max(1.0, (t1 - t0) / (w1 - w0))
+
+    def start_time(self, lead: float = 0.1, delivery: float = 0.3) -> float:
+        """A trajectory start stamp safely in the future [s of robot time]: `lead` [s] of robot time plus
+        `delivery` [s] of wall time for the goal to arrive, scaled by `time_rate()`."""
+        return self.now() + lead + delivery * self.time_rate()
 
     def send_joint_configuration(self, q: Sequence[float], end_time: float, wait: bool = True,
                                  **kwargs) -> GoalOutcome | TrajectoryGoal:

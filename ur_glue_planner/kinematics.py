@@ -50,6 +50,8 @@ class Kinematics:
 
     Raises:
         ValueError: An unknown joint or frame name, or a malformed base_pose.
+
+    One instance holds one Pinocchio ``Data`` workspace: do not share it between threads.
     """
 
     def __init__(self, urdf: str, joint_names: Sequence[str], frame: str,
@@ -85,7 +87,7 @@ class Kinematics:
             raise ValueError("base_pose must be a 4x4 rigid transform")
         self.base_pose = pose
         self._rb = pose[:3, :3].copy()
-        self._has_base = not np.allclose(pose, np.eye(4), atol=0.0)
+        self._has_base = not np.array_equal(pose, np.eye(4))
         for arr in (self.q_min, self.q_max, self.v_max, self.base_pose):
             arr.setflags(write=False)
 

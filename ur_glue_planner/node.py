@@ -1,11 +1,154 @@
-"""The `ur_glue_planner` node (placeholder until the planner lands)."""
+"""The `ur_glue_planner` node: plan the windshield glue job, execute it through FollowJointTrajectory, report.
+
+Works against ur_sim and the real UR driver alike (only their ROS interfaces are used). Parameters:
+`job` (YAML path, default config/glue_job.yaml), `out_dir` (default out/<job name>), `namespace` and
+`controller_name` (override the job's), `timeout` [s] for the server and joint states, `render` (bool).
+Exit codes: 0 success, 2 invalid job, 3 no server or joint states, 4 planning failed, 5 execution failed,
+130 cancelled by Ctrl-C / SIGTERM (the active goal is cancelled first).
+"""
+from __future__ import annotations
+
+import signal
 import sys
+import threading
+import time
+from pathlib import Path
+
+import rclpy
+from rclpy.node import Node
+from rclpy.signals import SignalHandlerOptions
+
+from ur_glue_planner.client import GoalOutcome, URClient
+from ur_glue_planner.errors import ClientError, JobError, PlanningError
+from ur_glue_planner.job import default_job_path, load_job
+from ur_glue_planner.plan import GluePlan, plan_job
+from ur_glue_planner.report import Executed, write_report
+
+RECORD_RATE = 50.0  # [Hz] nominal; the report uses every message received (exact stamps)
+MESSAGES = {
+    0: 'bead completed',
+    -1: 'the goal was invalid or preempted by another command',
+    -2: 'the goal named joints the controller does not have',
+    -3: 'the trajectory started in the past: check that this node and the driver share a clock (use_sim_time)',
+    -4: 'the robot left the path tolerance (it could not follow the trajectory)',
+    -5: 'the robot did not reach the goal tolerance in time',
+}
+
+
+class Interrupted(Exception):
+    """SIGINT or SIGTERM arrived while a goal was running; the goal has been cancelled."""
+
+
+def _progress(name: str, t0: float, duration: float):
+    last = [0.0]
+
+    def show(feedback) -> None:
+        now = time.monotonic()
+        if now - last[0] < 0.5:
+            return
+        last[0] = now
+        t = feedback.header.stamp.sec + feedback.header.stamp.nanosec * 1e-9 - t0
+        error = max((abs(e) for e in feedback.error.positions), default=0.0)
+        pct = 100.0 * min(max(t / duration, 0.0), 1.0)
+        print(f'  [{name}] {pct:5.1f} % of {duration:.1f} s, max joint tracking error {error * 1e3:.3f} mrad',
+              flush=True)
+    return show
+
+
+def execute(ur: URClient, plan: GluePlan, stop: threading.Event) -> tuple[GoalOutcome, Executed | None]:
+    """Run the plan's segments in order; returns the last outcome and the bead's recorded joint states."""
+    job = plan.job
+    path_tol = ur.tolerances(job.tolerances.path_position)
+    goal_tol = ur.tolerances(job.tolerances.goal_position)
+    recorder, outcome, run = None, None, None
+    for seg in plan.segments():
+        t0 = ur.start_time()
+        if seg.name == 'bead':
+            recorder = ur.start_recording(RECORD_RATE, t0)
+        print(f'{seg.name}: {len(seg.times)} points, {seg.duration:.2f} s', flush=True)
+        goal = ur.follow_trajectory(seg.q, seg.qd, seg.qdd, seg.times, path_tolerance=path_tol,
+                                    goal_tolerance=goal_tol, goal_time_tolerance=job.tolerances.goal_time,
+                                    wait=False, start_time=t0, feedback_callback=_progress(seg.name, t0, seg.duration))
+        while not goal.done:
+            if stop.is_set():
+                print(f'\ninterrupted: cancelling the {seg.name} goal', flush=True)
+                goal.cancel()
+                goal.wait(timeout=10.0)
+                raise Interrupted(seg.name)
+            time.sleep(0.02)
+        outcome = goal.wait()
+        if recorder is not None:
+            ur.sleep(0.2)
+            rec = ur.stop_recording(recorder, raw=True)
+            recorder = None
+            run = Executed(rec.t, rec.q, rec.qd)
+        if not outcome.succeeded:
+            print(f'{seg.name} failed: {MESSAGES.get(outcome.error_code, "unknown error code")} '
+                  f'(error_code {outcome.error_code}, status {outcome.status}): {outcome.error_string}', flush=True)
+            return outcome, run
+    return outcome, run
+
+
+def run_job(params: dict, stop: threading.Event, context=None) -> int:
+    """Plan, execute and report one job; returns the exit code."""
+    try:
+        job = load_job(params.get('job') or default_job_path())
+    except JobError as exc:
+        print(f'ur_glue_planner: invalid job: {exc}', file=sys.stderr)
+        return 2
+    namespace = params.get('namespace') or job.namespace
+    controller = params.get('controller_name') or job.controller_name
+    out_dir = Path(params.get('out_dir') or Path('out') / Path(job.source_file or 'glue_job').stem)
+    try:
+        ur = URClient(namespace=namespace, controller_name=controller, timeout=float(params.get('timeout', 30.0)),
+                      context=context, node_name='ur_glue_planner_client')
+    except ClientError as exc:
+        print(f'ur_glue_planner: {exc}', file=sys.stderr)
+        return 3
+    try:
+        state = ur.joint_state()
+        try:
+            plan = plan_job(job, state.q)
+        except PlanningError as exc:
+            print(f'ur_glue_planner: planning failed: {exc}', file=sys.stderr)
+            return 4
+        s = plan.summary
+        print(f'planned: bead {s.bead_length:.3f} m in {s.bead_duration:.2f} s, total {s.total_duration:.2f} s; '
+              f'planned speed within 1 % on {100 * s.within_1pct:.1f} % of the bead; planning took '
+              f'{1e3 * s.planning_seconds:.0f} ms', flush=True)
+        try:
+            outcome, run = execute(ur, plan, stop)
+        except Interrupted:
+            return 130
+        summary = write_report(plan, run, outcome.error_code, outcome.error_string, out_dir,
+                               render=bool(params.get('render', True)))
+        executed = summary.get('executed', {})
+        if executed:
+            print(f"executed: speed within 1 % on {100 * executed['fraction_within_1pct']:.1f} % of the bead, "
+                  f"max tip deviation {executed['max_tip_deviation_mm']:.3f} mm, max joint tracking error "
+                  f"{1e3 * executed['max_joint_tracking_error_rad']:.3f} mrad")
+        print(f'report: {out_dir.resolve()}', flush=True)
+        return 0 if outcome.succeeded else 5
+    finally:
+        ur.close()
 
 
 def main(argv: list[str] | None = None) -> int:
-    """Entry point of `ur_glue_planner`."""
-    print('ur_glue_planner: not implemented yet (see the planner issue); exiting.', file=sys.stderr)
-    return 0
+    """Entry point of `ur_glue_planner` (and `ros2 run ur_sim_driver ur_glue_planner`)."""
+    rclpy.init(args=argv, signal_handler_options=SignalHandlerOptions.NO)
+    stop = threading.Event()
+    for sig in (signal.SIGINT, signal.SIGTERM):
+        signal.signal(sig, lambda *_: stop.set())
+    node = Node('ur_glue_planner', allow_undeclared_parameters=True,
+                automatically_declare_parameters_from_overrides=True)
+    params = {name: p.value for name, p in node._parameters.items()}
+    node.destroy_node()
+    try:
+        return run_job(params, stop, context=rclpy.get_default_context())
+    except KeyboardInterrupt:
+        return 130
+    finally:
+        rclpy.try_shutdown()
 
 
 if __name__ == '__main__':

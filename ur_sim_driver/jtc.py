@@ -139,17 +139,20 @@ class TrajectoryController:
         if traj is None:
             sample = self._hold_sample()
         else:
+            # Sample at the current trajectory time, then advance it (as upstream): the reference for this
+            # cycle is the trajectory at `now`, which the joint controller tracks at this instant.
+            t_sample = self._traj_time
+            sample = traj.sample(t_sample)
             self._traj_time += period * self.speed_scaling
-            sample = traj.sample(self._traj_time)
             if self._token is not None:
-                outcome = self._supervise(sample, traj, q, qd)
+                outcome = self._supervise(sample, t_sample - traj.end_time, q, qd)
             if outcome is None and sample.ended and self._token is None:
                 # Topic trajectories (and finished goals) end by holding their last point.
                 self.hold(sample.positions)
         self.last_sample = sample
         return sample, outcome
 
-    def _supervise(self, sample: TrajectorySample, traj: Trajectory, q: np.ndarray,
+    def _supervise(self, sample: TrajectorySample, time_since_end: float, q: np.ndarray,
                    qd: np.ndarray) -> Outcome | None:
         tol = self._tolerances
         err_q = sample.positions - q
@@ -163,7 +166,7 @@ class TrajectoryController:
             return Outcome(token, result_codes.PATH_TOLERANCE_VIOLATED, reason)
         # Past the end the goal state is the last point at rest: velocity is judged against 0.
         reason = check_goal(err_q, -qd, None, tol, self.joint_names)
-        code = goal_outcome(self._traj_time - traj.end_time, reason, tol.goal_time)
+        code = goal_outcome(time_since_end, reason, tol.goal_time)
         if code is None:
             return None
         if code == result_codes.SUCCESSFUL:

@@ -37,7 +37,7 @@ class SimConfig:
     allow_partial_joints_goal: bool = False
     allow_nonzero_velocity_at_trajectory_end: bool = False
     update_rate: float = 0.0
-    physics_substeps: int = 1
+    physics_substeps: int = 0
     speed_scaling_initial_factor: float = 1.0
     real_time_factor: float = 1.0
     tool: str = 'none'
@@ -91,8 +91,9 @@ def sim_config_from_params(params: Mapping[str, Any]) -> SimConfig:
     if len(initial) != 6 or not all(math.isfinite(x) for x in initial):
         raise ConfigError(f"parameter 'initial_positions' = {list(initial)!r} must be 6 finite numbers [rad]")
     substeps = get('physics_substeps', d.physics_substeps)
-    if isinstance(substeps, bool) or not isinstance(substeps, int) or not 1 <= substeps <= 100:
-        raise ConfigError(f"parameter 'physics_substeps' = {substeps!r} must be a whole number in [1, 100]")
+    if isinstance(substeps, bool) or not isinstance(substeps, int) or not 0 <= substeps <= 100:
+        raise ConfigError(f"parameter 'physics_substeps' = {substeps!r} must be a whole number in [0, 100] "
+                          '(0: automatic, physics step <= 2 ms)')
     constraints = []
     for j in joints:
         constraints.append(JointConstraint(

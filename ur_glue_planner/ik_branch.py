@@ -1,0 +1,141 @@
+"""Choice of the arm configuration (IK branch) in which the whole bead is laid.
+
+A 6R arm reaches a pose in up to eight ways (shoulder left/right, elbow up/down, wrist
+flipped or not); warm-started IK then stays in the branch it starts in. Not every branch
+can follow the whole bead: for the seed's windshield, only the branches with the wrist flipped
+(q5 > 0 in the ROS 2 description) reach the top edge, and IK from the home pose lands in one
+of the others for some start points (the seed's first waypoint). So the planner collects the
+branches at the bead start (IK from the reference pose and from fixed pseudo-random guesses),
+follows each one along the bead on a coarse grid, and keeps the branch that stays continuous
+with the lowest peak joint-speed demand (furthest from singularities); near-ties go to the
+branch nearest to the reference pose.
+"""
+
+from __future__ import annotations
+
+import math
+from dataclasses import dataclass
+
+import numpy as np
+
+from ur_glue_planner.errors import PlanningError
+from ur_glue_planner.glue_path import GluePath
+from ur_glue_planner.kinematics import Kinematics
+
+_TWO_PI = 2.0 * math.pi
+
+
+@dataclass(frozen=True)
+class Branch:
+    """One IK branch at the bead start.
+
+    Attributes:
+        q: Joint positions (n,) [rad] at the bead start, each joint taken within 2 pi of the
+            reference where the limits allow.
+        feasible: It follows the whole bead without IK failure or jump.
+        peak_usage: Largest |dq/ds| * speed / v_max of any joint along the bead (inf if not
+            feasible); > 1 means the bead needs a slowdown in this branch.
+        distance: Euclidean norm of q - reference [rad] at the bead start.
+        reason: Why it is not feasible ('' if it is).
+    """
+
+    q: np.ndarray
+    feasible: bool
+    peak_usage: float
+    distance: float
+    reason: str
+
+
+def _near(q: np.ndarray, reference: np.ndarray, q_min: np.ndarray, q_max: np.ndarray) -> np.ndarray:
+    """q with each joint shifted by whole turns towards the reference, staying within limits."""
+    out = q.copy()
+    for j in range(len(q)):
+        cands = q[j] + _TWO_PI * np.arange(-2, 3)
+        cands = cands[(cands >= q_min[j]) & (cands <= q_max[j])]
+        if cands.size:
+            out[j] = cands[np.argmin(np.abs(cands - reference[j]))]
+    return out
+
+
+def start_branches(kin: Kinematics, target: np.ndarray, reference: np.ndarray, n_random: int = 32,
+                   seed: int = 0) -> list[np.ndarray]:
+    """Distinct IK solutions (each (n,) [rad]) of the world pose ``target`` (4, 4).
+
+    Guesses: ``reference`` first, then ``n_random`` uniform ones in [-pi, pi] from a fixed seed.
+    """
+    rng = np.random.default_rng(seed)
+    guesses = [np.asarray(reference, dtype=float)] + list(rng.uniform(-math.pi, math.pi, (n_random, kin.n)))
+    found: list[np.ndarray] = []
+    for guess in guesses:
+        res = kin.ik(target, guess, max_iterations=100)
+        if not res.converged:
+            continue
+        q = _near(res.q, reference, kin.q_min, kin.q_max)
+        wrapped = np.mod(q + math.pi, _TWO_PI)
+        if all(np.max(np.abs(np.mod(wrapped - np.mod(f + math.pi, _TWO_PI) + math.pi, _TWO_PI) - math.pi)) > 1e-3
+               for f in found):
+            found.append(q)
+    return found
+
+
+def follow(path: GluePath, kin: Kinematics, q_start: np.ndarray, speed: float, spacing: float = 0.02,
+           max_jump: float = 0.6) -> tuple[bool, float, str]:
+    """Follow the bead from ``q_start`` on a grid of ``spacing`` [m].
+
+    Returns:
+        (feasible, peak joint-speed usage at ``speed`` [m/s], reason if not feasible). A joint
+        step over ``max_jump`` [rad] between grid points is a branch change.
+    """
+    n = max(2, math.ceil(path.length / spacing) + 1)
+    s = np.linspace(0.0, path.length, n)
+    pos, rot = path.sample(s)[0], path.orientation(s)
+    target = np.eye(4)
+    q_prev, peak = np.asarray(q_start, dtype=float), 0.0
+    for k in range(n):
+        target[:3, :3], target[:3, 3] = rot[k], pos[k]
+        res = kin.ik(target, q_prev, max_iterations=50)
+        if not res.converged:
+            return False, math.inf, f"IK fails at s = {s[k]:.3f} m (residual {res.residual_pos:.2e} m)"
+        step = np.abs(res.q - q_prev)
+        if k > 0 and step.max() > max_jump:
+            j = int(np.argmax(step))
+            return False, math.inf, f"{kin.joint_names[j]} jumps {step[j]:.2f} rad at s = {s[k]:.3f} m"
+        if k > 0:
+            peak = max(peak, float(np.max(step / (s[k] - s[k - 1]) * speed / kin.v_max)))
+        q_prev = res.q
+    return True, peak, ""
+
+
+def choose_branch(path: GluePath, kin: Kinematics, reference: np.ndarray, speed: float, *,
+                  n_random: int = 24, tie: float = 0.05) -> tuple[Branch, tuple[Branch, ...]]:
+    """The branch to lay the bead in, and every branch examined (chosen one included).
+
+    Args:
+        path: The bead.
+        kin: Tip kinematics.
+        reference: Joint positions (n,) [rad] to prefer, e.g. the home pose.
+        speed: Bead speed [m/s], to express the joint-speed demand as a fraction of v_max.
+        n_random: Extra pseudo-random IK guesses (fixed seed: the choice is repeatable).
+        tie: Peak usages within this fraction count as equal; the nearer branch wins.
+
+    Raises:
+        PlanningError: No branch reaches the bead start, or none follows the whole bead.
+    """
+    reference = np.asarray(reference, dtype=float)
+    start = np.eye(4)
+    start[:3, :3], start[:3, 3] = path.orientation(0.0), path.sample(0.0)[0]
+    qs = start_branches(kin, start, reference, n_random)
+    if not qs:
+        raise PlanningError(f"no IK solution for the bead start {np.round(start[:3, 3], 4).tolist()} m "
+                            f"(frame {kin.frame}): out of reach")
+    branches = []
+    for q in qs:
+        ok, peak, why = follow(path, kin, q, speed)
+        branches.append(Branch(q, ok, peak, float(np.linalg.norm(q - reference)), why))
+    good = [b for b in branches if b.feasible]
+    if not good:
+        reasons = "; ".join(f"branch {np.round(b.q, 2).tolist()}: {b.reason}" for b in branches)
+        raise PlanningError(f"no IK branch follows the whole bead ({reasons})")
+    best_usage = min(b.peak_usage for b in good)
+    near_best = [b for b in good if b.peak_usage <= best_usage * (1.0 + tie)]
+    return min(near_best, key=lambda b: b.distance), tuple(branches)
