@@ -14,6 +14,7 @@ setup(
         (f'share/{PACKAGE}', ['package.xml']),
         (f'share/{PACKAGE}/config', glob('config/*.yaml')),
         (f'share/{PACKAGE}/config/ur_types', glob('config/ur_types/*.yaml')),
+        (f'share/{PACKAGE}/config/scenes', glob('config/scenes/*.yaml')),
         (f'share/{PACKAGE}/meshes', glob('meshes/*.stl')),
     ],
     install_requires=['setuptools'],

@@ -1,0 +1,60 @@
+"""The glue planner end to end against an in-process ur_sim with the windshield scene: plan, execute, report."""
+import json
+import threading
+
+import pytest
+import yaml
+from sim_harness import running_sim
+
+from ur_glue_planner.node import run_job
+from ur_sim_driver.scene import config_dir
+
+
+@pytest.fixture(scope='module')
+def windshield_sim():
+    params = yaml.safe_load((config_dir() / 'ur_sim_windshield.yaml').read_text())['/**']['ros__parameters']
+    params['real_time_factor'] = 0.0
+    with running_sim(**params) as h:
+        yield h
+
+
+def test_default_job_runs_and_writes_the_report(windshield_sim, tmp_path):
+    code = run_job({'job': str(config_dir() / 'glue_job.yaml'), 'out_dir': str(tmp_path), 'render': True},
+                   threading.Event(), context=windshield_sim.client.context)
+    assert code == 0
+    summary = json.loads((tmp_path / 'summary.json').read_text())
+    assert summary['result']['error_code'] == 0
+    executed = summary['executed']
+    assert executed['fraction_within_1pct'] > 0.9
+    assert executed['max_tip_deviation_mm'] < 0.5
+    assert abs(summary['bead_length_m'] - 2.2) < 0.1
+    for name in ('joint_position', 'joint_velocity', 'joint_acceleration', 'tcp_speed', 'tip_path_3d',
+                 'joint_position_planned_vs_measured', 'render'):
+        assert (tmp_path / f'{name}.png').stat().st_size > 10_000, name
+
+
+def test_invalid_job_exits_2_naming_the_field(tmp_path, capsys):
+    bad = yaml.safe_load((config_dir() / 'glue_job.yaml').read_text())
+    bad['tcp_speed'] = -1.0
+    path = tmp_path / 'bad.yaml'
+    path.write_text(yaml.safe_dump(bad))
+    assert run_job({'job': str(path)}, threading.Event()) == 2
+    assert 'tcp_speed' in capsys.readouterr().err
+
+
+def test_missing_server_exits_3(windshield_sim, capsys):
+    code = run_job({'job': str(config_dir() / 'glue_job.yaml'), 'namespace': '/nobody', 'timeout': 0.5},
+                   threading.Event(), context=windshield_sim.client.context)
+    assert code == 3
+    assert 'not found within 0.5 s' in capsys.readouterr().err
+
+
+def test_stop_request_cancels_the_running_goal(windshield_sim, tmp_path):
+    stop = threading.Event()
+    timer = threading.Timer(1.0, stop.set)
+    timer.start()
+    code = run_job({'job': str(config_dir() / 'glue_job.yaml'), 'out_dir': str(tmp_path), 'render': False},
+                   stop, context=windshield_sim.client.context)
+    timer.cancel()
+    assert code == 130
+    assert windshield_sim.sim.jtc.active_token is None  # the goal was cancelled, the robot holds
