@@ -20,17 +20,27 @@ def _executable(name: str) -> Path:
     return path
 
 
+def _start_ur_sim(**popen) -> subprocess.Popen:
+    return subprocess.Popen([str(_executable('ur_sim')), '--ros-args', '-p', 'real_time_factor:=0.0'],
+                            start_new_session=True, **popen)
+
+
+def _joint_states(count: int) -> list:
+    """Wait for `count` /joint_states messages from the ur_sim process."""
+    received = []
+    with ros_context() as ctx:
+        node = Node('exe_probe', context=ctx)
+        node.create_subscription(JointState, '/joint_states', received.append, 10)
+        with executor_with(ctx, node) as ex:
+            spin_until(ex, lambda: len(received) >= count, 30.0, '/joint_states from the ur_sim process')
+    return received
+
+
 @pytest.mark.parametrize('sig', [signal.SIGINT, signal.SIGTERM])
 def test_ur_sim_publishes_joint_states_and_exits_cleanly_on_signal(sig):
-    proc = subprocess.Popen([str(_executable('ur_sim')), '--ros-args', '-p', 'real_time_factor:=0.0'],
-                            stdout=subprocess.PIPE, stderr=subprocess.STDOUT, text=True, start_new_session=True)
-    received = []
+    proc = _start_ur_sim(stdout=subprocess.PIPE, stderr=subprocess.STDOUT, text=True)
     try:
-        with ros_context() as ctx:
-            node = Node('exe_probe', context=ctx)
-            node.create_subscription(JointState, '/joint_states', received.append, 10)
-            with executor_with(ctx, node) as ex:
-                spin_until(ex, lambda: len(received) >= 5, 30.0, '/joint_states from the ur_sim process')
+        received = _joint_states(5)
     finally:
         os.killpg(proc.pid, sig)
         try:
@@ -50,15 +60,9 @@ def test_ur_glue_planner_executable_is_installed():
 
 
 def test_timestamps_are_simulated_time():
-    proc = subprocess.Popen([str(_executable('ur_sim')), '--ros-args', '-p', 'real_time_factor:=0.0'],
-                            stdout=subprocess.DEVNULL, stderr=subprocess.DEVNULL, start_new_session=True)
-    received = []
+    proc = _start_ur_sim(stdout=subprocess.DEVNULL, stderr=subprocess.DEVNULL)
     try:
-        with ros_context() as ctx:
-            node = Node('exe_probe_time', context=ctx)
-            node.create_subscription(JointState, '/joint_states', received.append, 10)
-            with executor_with(ctx, node) as ex:
-                spin_until(ex, lambda: len(received) >= 2, 30.0, '/joint_states')
+        received = _joint_states(2)
     finally:
         os.killpg(proc.pid, signal.SIGINT)
         proc.wait(timeout=20)

@@ -276,11 +276,5 @@ def load_job(path: str | Path) -> GlueJob:
 
 def default_job_path() -> Path:
     """``config/glue_job.yaml`` of the source tree, else of the installed share directory."""
-    repo = Path(__file__).resolve().parents[1] / "config" / "glue_job.yaml"
-    if repo.is_file():
-        return repo
-    try:
-        from ament_index_python.packages import get_package_share_directory
-        return Path(get_package_share_directory("ur_sim_driver")) / "config" / "glue_job.yaml"
-    except Exception:  # not installed, or ament_index missing: report the source path
-        return repo
+    from ur_sim_driver.paths import config_dir
+    return config_dir() / "glue_job.yaml"

@@ -7,15 +7,7 @@ import numpy as np
 import yaml
 
 from ur_sim_driver.errors import ConfigError
-
-
-def config_dir() -> Path:
-    """The package's config/ directory (source tree first, then the installed share directory)."""
-    here = Path(__file__).resolve().parents[1] / 'config'
-    if here.is_dir():
-        return here
-    from ament_index_python.packages import get_package_share_directory
-    return Path(get_package_share_directory('ur_sim_driver')) / 'config'
+from ur_sim_driver.paths import config_dir
 
 
 def pose_matrix(xyz: list[float], rpy: list[float]) -> np.ndarray:

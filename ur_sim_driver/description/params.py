@@ -18,6 +18,7 @@ from typing import Any
 import numpy as np
 import yaml
 
+from ur_sim_driver import paths
 from ur_sim_driver.errors import ConfigError
 
 UR_TYPES: tuple[str, ...] = ('ur5', 'ur5e', 'ur10', 'ur10e')
@@ -199,14 +200,7 @@ class URParams:
 
 def config_dir() -> Path:
     """Directory holding ``<type>.yaml``: the source tree first, then the installed share dir."""
-    repo = Path(__file__).resolve().parents[2] / 'config' / 'ur_types'
-    if repo.is_dir():
-        return repo
-    try:
-        from ament_index_python.packages import get_package_share_directory
-        return Path(get_package_share_directory('ur_sim_driver')) / 'config' / 'ur_types'
-    except Exception:  # not installed, or ament_index missing: report the source path
-        return repo
+    return paths.config_dir() / 'ur_types'
 
 
 def _get(d: dict, key: str, where: str) -> Any:
