@@ -237,6 +237,43 @@ def world_to_local(p: np.ndarray, model: WindshieldModel = DEFAULT_WINDSHIELD) -
     return model.world_to_local(p)
 
 
+def fan_slab(boundary: np.ndarray, resolution: float, min_rings: int = 1
+             ) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
+    """Triangulation of a slab over a star-shaped outline (shared by the whole panel and its pieces).
+
+    The top face is meshed on rings that shrink ``boundary`` towards its centroid, about ``resolution`` [m]
+    apart; the bottom face repeats the top's vertices at index offset ``len(uv)``.
+
+    Args:
+        boundary: (n, 2) outline points, counter-clockwise.
+        resolution: ring spacing [m].
+        min_rings: fewest rings.
+
+    Returns:
+        uv (1 + m n, 2) top vertices; top faces (k, 3), counter-clockwise seen from +w; side-wall faces
+        joining the top rim to the bottom rim.
+    """
+    n = len(boundary)
+    center = boundary.mean(axis=0)
+    m = max(min_rings, math.ceil(np.linalg.norm(boundary - center, axis=1).max() / resolution))
+    scales = np.arange(1, m + 1) / m
+    uv = np.vstack([center[None], (center + scales[:, None, None] * (boundary - center)).reshape(-1, 2)])
+    nv = len(uv)
+
+    def ring(k: int, j: np.ndarray) -> np.ndarray:
+        return 1 + (k - 1) * n + j % n
+
+    j = np.arange(n)
+    faces = [np.column_stack([np.zeros(n, dtype=int), ring(1, j), ring(1, j + 1)])]
+    for k in range(1, m):
+        a, b, c, d = ring(k, j), ring(k, j + 1), ring(k + 1, j + 1), ring(k + 1, j)
+        faces += [np.column_stack([a, d, c]), np.column_stack([a, c, b])]
+    rim, rim_next = ring(m, j), ring(m, j + 1)
+    side = np.vstack([np.column_stack([rim, rim_next + nv, rim_next]),
+                      np.column_stack([rim, rim + nv, rim_next + nv])])
+    return uv, np.vstack(faces), side
+
+
 def build_mesh(model: WindshieldModel = DEFAULT_WINDSHIELD, resolution: float = 0.03,
                frame: str = "world") -> trimesh.Trimesh:
     """Closed (watertight) triangle mesh of the glass with outward normals.
@@ -255,32 +292,12 @@ def build_mesh(model: WindshieldModel = DEFAULT_WINDSHIELD, resolution: float = 
     glass = model.glass
     n = max(16, math.ceil(glass.length / resolution))
     boundary = glass.sample(n)
-    center = boundary.mean(axis=0)
-    m = max(2, math.ceil(np.linalg.norm(boundary - center, axis=1).max() / resolution))
-    scales = np.arange(1, m + 1) / m
-    uv = np.vstack([center[None], (center + scales[:, None, None] * (boundary - center)
-                                   ).reshape(-1, 2)])
+    uv, top_faces, side = fan_slab(boundary, resolution, min_rings=2)
     top = np.column_stack([uv, model.height(uv[:, 0], uv[:, 1])])
     bottom = top - model.thickness * model._panel_normal(uv[:, 0], uv[:, 1])
-    nv = len(uv)
-
-    def ring(k: int, j: np.ndarray) -> np.ndarray:
-        return 1 + (k - 1) * n + j % n
-
-    j = np.arange(n)
-    faces = [np.column_stack([np.zeros(n, dtype=int), ring(1, j), ring(1, j + 1)])]
-    for k in range(1, m):
-        a, b, c, d = ring(k, j), ring(k, j + 1), ring(k + 1, j + 1), ring(k + 1, j)
-        faces += [np.column_stack([a, d, c]), np.column_stack([a, c, b])]
-    top_faces = np.vstack(faces)
     if glass.orientation < 0:  # keep the glue face's normals along +w
-        top_faces = top_faces[:, ::-1]
-    rim_t, rim_b = ring(m, j), ring(m, j + 1)
-    side = np.vstack([np.column_stack([rim_t, rim_b + nv, rim_b]),
-                      np.column_stack([rim_t, rim_t + nv, rim_b + nv])])
-    if glass.orientation < 0:
-        side = side[:, ::-1]
-    all_faces = np.vstack([top_faces, top_faces[:, ::-1] + nv, side])
+        top_faces, side = top_faces[:, ::-1], side[:, ::-1]
+    all_faces = np.vstack([top_faces, top_faces[:, ::-1] + len(uv), side])
     vertices = model._panel_to(np.vstack([top, bottom]), frame)
     return trimesh.Trimesh(vertices=vertices, faces=all_faces, process=True)
 

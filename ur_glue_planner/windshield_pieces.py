@@ -24,7 +24,7 @@ from pathlib import Path
 import numpy as np
 import trimesh
 
-from ur_glue_planner.windshield import DEFAULT_WINDSHIELD, WindshieldModel
+from ur_glue_planner.windshield import DEFAULT_WINDSHIELD, WindshieldModel, fan_slab
 
 MAX_DEVIATION = 0.0005  # [m] allowed height of a piece's hull above the glue face
 DEFAULT_GRID = (12, 2)  # tiles across (u) and up (v) the glass
@@ -130,29 +130,10 @@ def build_piece(model: WindshieldModel, cell_uv: np.ndarray, resolution: float =
         k = max(1, math.ceil(np.linalg.norm(b - a) / resolution))
         boundary.append(a + np.arange(k)[:, None] / k * (b - a))
     boundary = np.vstack(boundary)
-    n = len(boundary)
-    center = boundary.mean(axis=0)
-    m = max(1, math.ceil(np.linalg.norm(boundary - center, axis=1).max() / resolution))
-    scales = np.arange(1, m + 1) / m
-    uv = np.vstack([center[None], (center + scales[:, None, None] * (boundary - center)
-                                   ).reshape(-1, 2)])
+    uv, top_faces, side = fan_slab(boundary, resolution, min_rings=1)
     top = model.surface_point(uv[:, 0], uv[:, 1], frame)
     bottom = top - model.thickness * model.surface_normal(uv[:, 0], uv[:, 1], frame)
-    nv = len(uv)
-
-    def ring(k: int, j: np.ndarray) -> np.ndarray:
-        return 1 + (k - 1) * n + j % n
-
-    j = np.arange(n)
-    faces = [np.column_stack([np.zeros(n, dtype=int), ring(1, j), ring(1, j + 1)])]
-    for k in range(1, m):
-        a, b, c, d = ring(k, j), ring(k, j + 1), ring(k + 1, j + 1), ring(k + 1, j)
-        faces += [np.column_stack([a, d, c]), np.column_stack([a, c, b])]
-    top_faces = np.vstack(faces)  # counter-clockwise seen from +w: normals out of the glue face
-    rim_j, rim_next = ring(m, j), ring(m, j + 1)
-    side = np.vstack([np.column_stack([rim_j, rim_next + nv, rim_next]),
-                      np.column_stack([rim_j, rim_j + nv, rim_next + nv])])
-    all_faces = np.vstack([top_faces, top_faces[:, ::-1] + nv, side])
+    all_faces = np.vstack([top_faces, top_faces[:, ::-1] + len(uv), side])
     return trimesh.Trimesh(vertices=np.vstack([top, bottom]), faces=all_faces, process=True)
 
 
