@@ -183,7 +183,7 @@ def tracking_error(ur_type: str = 'ur5e') -> dict:
     sim = Simulator(cfg)
     tol = default_tolerances(cfg.joints, trajectory=0.2, goal=0.1, stopped_velocity=0.2, goal_time=0.0)
     state = sim.state()
-    jtc = TrajectoryController(cfg.joints, tol, state.q)
+    jtc = TrajectoryController(cfg.joints, tol, state.q, sim.params.v_max, sim.a_max)
     cmd = TrajectoryCommand.from_arrays(JOINTS, **STANDARD)
     jtc.start(map_to_config_order(cmd, cfg.joints, state.q), state.t, state.q, state.qd, token='bench')
     worst = np.zeros(6)
@@ -192,7 +192,7 @@ def tracking_error(ur_type: str = 'ur5e') -> dict:
         state = sim.state()
         ref, _ = jtc.update(state.t, sim.control_dt, state.q, state.qd)
         worst = np.maximum(worst, np.abs(ref.positions - state.q))
-        sim.advance(state, ref)
+        sim.advance(state, ref, jtc.stop)
     return {'ur_type': ur_type, 'control_rate_hz': sim.control_rate, 'max_error_mrad': float(worst.max() * 1e3),
             'per_joint_mrad': (worst * 1e3).round(4).tolist()}
 

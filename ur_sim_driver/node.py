@@ -78,6 +78,7 @@ class UrSimNode(Node):
             goal=[c.goal for c in self.cfg.constraints], stopped_velocity=self.cfg.stopped_velocity_tolerance,
             goal_time=self.cfg.goal_time)
         self.jtc = TrajectoryController(self.cfg.joints, self._defaults, self.sim.state().q,
+                                        self.sim.params.v_max, self.sim.a_max,
                                         self.cfg.speed_scaling_initial_factor)
         self._lock = threading.Lock()
         self._waiters: dict[bytes, _GoalWaiter] = {}  # by goal id
@@ -280,18 +281,18 @@ class UrSimNode(Node):
         with self._lock:
             state = self.sim.state()
             sample, outcome = self.jtc.update(state.t, self.sim.control_dt, state.q, state.qd)
-            tau = self.sim.advance(state, sample)
+            tau = self.sim.advance(state, sample, self.jtc.stop)
             token = self.jtc.active_token
             feedback_due = token is not None and self._cycle % self._feedback_every == 0
-            factor = self.jtc.speed_scaling
-        self._publish(state, sample, tau, factor)
+            robot_factor, total_factor = self.jtc.scaling.factor, self.jtc.scaling.total
+        self._publish(state, sample, tau, robot_factor, total_factor)
         if feedback_due:
             self._publish_feedback(token, state, sample)
         if outcome is not None:
             self._finish(outcome)
         self._cycle += 1
 
-    def _publish(self, state, sample, tau, factor) -> None:
+    def _publish(self, state, sample, tau, robot_factor: float, total_factor: float) -> None:
         stamp = conv.sec_to_time(state.t)
         js = self._js
         js.header.stamp = stamp
@@ -305,9 +306,10 @@ class UrSimNode(Node):
         conv.fill_point(st.feedback, state.q, state.qd)
         conv.fill_point(st.error, sample.positions - state.q, sample.velocities - state.qd)
         conv.fill_point(st.output, sample.positions, sample.velocities, effort=tau)
-        st.speed_scaling_factor = factor
+        # The controller reports the factor it advances trajectory time by; the broadcaster the robot's own.
+        st.speed_scaling_factor = total_factor
         self._pub_state.publish(st)
-        self._scaling_msg.data = factor * 100.0
+        self._scaling_msg.data = robot_factor * 100.0
         self._pub_scaling.publish(self._scaling_msg)
         p, q = self.sim.tcp_pose()
         pose = self._tcp_msg
