@@ -1,0 +1,161 @@
+"""The link between the simulation process and the trajectory controller's interface process.
+
+The scaled JTC's action server and joint_trajectory subscription live in a process of their own
+(``trajectory_gateway.py``), so that receiving and converting a large trajectory (rclpy deserializes an action
+goal in C while holding the GIL: about 1 s per 100,000 points here) never stops the simulation loop, which must
+publish every 2 ms. The two processes exchange the small messages below over a pipe, in order:
+
+* gateway -> simulation: :class:`Start` (a validated trajectory, in the sender's joint order), :class:`Cancel`;
+* simulation -> gateway: :class:`Ended` (a goal's outcome), :class:`Canceled` (the answer to a Cancel),
+  :class:`Feedback`.
+
+The simulated time is shared through a double in shared memory, written by the simulation every cycle and read
+by the gateway's validation (stamps in the past, stamps far in the future).
+"""
+from __future__ import annotations
+
+import multiprocessing
+import queue
+import threading
+from collections.abc import Callable, Hashable
+from dataclasses import dataclass
+
+import numpy as np
+
+from ur_sim_driver.command_arrays import CommandArrays
+from ur_sim_driver.trajectory_types import SegmentTolerances
+
+
+@dataclass(frozen=True)
+class GatewayConfig:
+    """What the gateway process needs to serve the controller's interfaces (picklable).
+
+    Attributes:
+        node_name: the controller's name (its node, as in ros2_control).
+        namespace: namespace of every interface ('' or '/ur10').
+        joints: n controller joint names (with the tf_prefix).
+        q_min, q_max, v_max: (n,) joint limits [rad], [rad/s], used only with `strict_limits`.
+        strict_limits: reject positions outside the limits and velocities above them (stricter than upstream).
+        allow_partial: upstream allow_partial_joints_goal.
+        allow_nonzero_end_velocity: upstream allow_nonzero_velocity_at_trajectory_end.
+        defaults: the controller's default tolerances (resolved with each goal's in the gateway).
+    """
+
+    node_name: str
+    namespace: str
+    joints: tuple[str, ...]
+    q_min: np.ndarray
+    q_max: np.ndarray
+    v_max: np.ndarray
+    strict_limits: bool
+    allow_partial: bool
+    allow_nonzero_end_velocity: bool
+    defaults: SegmentTolerances
+
+
+@dataclass(frozen=True, eq=False)
+class Start:
+    """Replace the active trajectory. `token` names an action goal; None for a topic message."""
+
+    token: bytes | None
+    command: CommandArrays
+    tolerances: SegmentTolerances | None
+
+
+@dataclass(frozen=True)
+class Cancel:
+    """The client asked to cancel goal `token`."""
+
+    token: bytes
+
+
+@dataclass(frozen=True)
+class Ended:
+    """Goal `token` ended with `code` (control_msgs result code) and `message`."""
+
+    token: Hashable
+    code: int
+    message: str
+
+
+@dataclass(frozen=True)
+class Canceled:
+    """Answer to :class:`Cancel`: `ok` when the goal was still active and now holds."""
+
+    token: bytes
+    ok: bool
+
+
+@dataclass(frozen=True, eq=False)
+class Feedback:
+    """One FollowJointTrajectory feedback: time [s] and (n,) desired/actual/error arrays."""
+
+    token: bytes
+    t: float
+    desired: tuple[np.ndarray, np.ndarray, np.ndarray]
+    actual: tuple[np.ndarray, np.ndarray]
+    error: tuple[np.ndarray, np.ndarray]
+
+
+STOP = 'stop'  # sent last: the gateway ends its goals and exits
+
+
+class GatewayLink:
+    """The simulation side: starts the gateway process, receives from it in a thread, sends from another.
+
+    Args:
+        config: the gateway's configuration.
+        on_message: called in the receiving thread for every :class:`Start` and :class:`Cancel`.
+    """
+
+    def __init__(self, config: GatewayConfig, on_message: Callable[[object], None]) -> None:
+        # spawn, not fork: the parent runs DDS threads that a forked child must not inherit.
+        ctx = multiprocessing.get_context('spawn')
+        self.sim_time = ctx.Value('d', 0.0, lock=False)
+        self._conn, child_conn = ctx.Pipe(duplex=True)
+        from ur_sim_driver.trajectory_gateway import run_gateway
+        self.process = ctx.Process(target=run_gateway, args=(config, child_conn, self.sim_time),
+                                   name=f'{config.node_name}_gateway', daemon=True)
+        self.process.start()
+        child_conn.close()
+        self._on_message = on_message
+        self._outbox: queue.SimpleQueue = queue.SimpleQueue()
+        self._closed = threading.Event()
+        self._receiver = threading.Thread(target=self._receive, name='gateway_receive', daemon=True)
+        self._sender = threading.Thread(target=self._send, name='gateway_send', daemon=True)
+        self._receiver.start()
+        self._sender.start()
+
+    def send(self, message: object) -> None:
+        """Queue a message for the gateway; never blocks (the simulation loop calls this)."""
+        self._outbox.put(message)
+
+    def _send(self) -> None:
+        while True:
+            message = self._outbox.get()
+            try:
+                self._conn.send(message)
+            except (OSError, EOFError, BrokenPipeError):
+                return
+            if message is STOP:
+                return
+
+    def _receive(self) -> None:
+        while not self._closed.is_set():
+            try:
+                message = self._conn.recv()
+            except (OSError, EOFError):
+                return
+            self._on_message(message)
+
+    def close(self, timeout: float = 5.0) -> None:
+        """Stop the gateway process (it ends its goals as aborted) and the threads."""
+        self._closed.set()
+        self._outbox.put(STOP)
+        self._sender.join(timeout=timeout)
+        self.process.join(timeout=timeout)
+        if self.process.is_alive():
+            self.process.terminate()
+            self.process.join(timeout=timeout)
+        self._receiver.join(timeout=timeout)  # the child's end is closed now: recv() has seen EOF
+        self._conn.close()
