@@ -22,9 +22,9 @@ from dataclasses import dataclass
 
 import numpy as np
 
-# A setpoint within these of the reference is on it (then the reference is passed through unchanged).
-_ON_REFERENCE_POS = 1e-7  # [rad]
-_ON_REFERENCE_VEL = 1e-5  # [rad/s]
+# The sqrt law plans the approach with this share of the acceleration limit: the rest absorbs the control
+# period's discreteness, so the setpoint reaches the reference from behind instead of passing it.
+_APPROACH_SHARE = 0.5
 # Share of the control rate used as the gain of the linear part of the approach law (as torque_control.py).
 _GAIN_TIMES_PERIOD = 0.3
 
@@ -70,7 +70,7 @@ def approach_velocity(distance: np.ndarray, gain: float, a_max: np.ndarray) -> n
     never asks for a deceleration above a_max.
     """
     d = np.abs(distance)
-    return np.sign(distance) * np.minimum(gain * d, np.sqrt(2.0 * a_max * d))
+    return np.sign(distance) * np.minimum(gain * d, np.sqrt(2.0 * _APPROACH_SHARE * a_max * d))
 
 
 class JointServo:
@@ -107,7 +107,9 @@ class JointServo:
         """
         p, v = self._p, self._v
         feasible = (np.abs(rd) <= limits.v_max) & (np.abs(rdd) <= limits.a_max)
-        on_ref = (np.abs(p - r) <= _ON_REFERENCE_POS) & (np.abs(v - rd) <= _ON_REFERENCE_VEL) & feasible
+        # On the reference: within what one period of the acceleration limit can change (the setpoint's own
+        # integration drifts from a cubic or quintic by jerk dt^3, far less).
+        on_ref = (np.abs(p - r) <= limits.a_max * dt * dt) & (np.abs(v - rd) <= limits.a_max * dt) & feasible
         # Off the reference: aim at the reference velocity plus the approach velocity of the remaining gap.
         v_goal = rd + approach_velocity(r - p, self._gain, limits.a_max)
         a = np.clip((v_goal - v) / dt, -limits.a_max, limits.a_max)
