@@ -19,6 +19,7 @@ from rclpy.parameter import Parameter
 from rclpy.qos import QoSProfile
 from ros_helpers import ros_context
 from sensor_msgs.msg import JointState
+from std_msgs.msg import Float64
 from trajectory_msgs.msg import JointTrajectory, JointTrajectoryPoint
 
 from ur_sim_driver.node import UrSimNode
@@ -60,6 +61,8 @@ class Recording:
     t: list = field(default_factory=list)
     q: list = field(default_factory=list)
     qd: list = field(default_factory=list)
+    effort: list = field(default_factory=list)
+    speed_scaling: list = field(default_factory=list)  # [%] from the speed scaling state broadcaster
 
     def arrays(self):
         return np.array(self.t), np.array(self.q), np.array(self.qd)
@@ -80,6 +83,7 @@ class SimHarness:
         self.scaling = client.create_publisher(SpeedScalingFactor, p(f'{ctrl}/speed_scaling_input'), 10)
         self.recording: Recording | None = None
         self._js_topic = p('joint_states')
+        self._scaling_topic = p('speed_scaling_state_broadcaster/speed_scaling')
         self._recorder: Node | None = None
         wait_for(lambda: self.action.server_is_ready(), what='the FollowJointTrajectory server')
         wait_for(lambda: self.topic.get_subscription_count() > 0, what='the joint_trajectory subscriber')
@@ -90,6 +94,12 @@ class SimHarness:
             rec.t.append(msg.header.stamp.sec + msg.header.stamp.nanosec * 1e-9)
             rec.q.append(list(msg.position))
             rec.qd.append(list(msg.velocity))
+            rec.effort.append(list(msg.effort))
+
+    def _on_scaling(self, msg: Float64) -> None:
+        rec = self.recording
+        if rec is not None:
+            rec.speed_scaling.append(msg.data)
 
     def record(self) -> Recording:
         """Start recording /joint_states (a subscription exists only while recording: in fast mode it is costly)."""
@@ -99,6 +109,7 @@ class SimHarness:
             # destroyed (destroying entities under a spinning executor races in rclpy).
             node = Node('test_recorder', context=self.client.context)
             node.create_subscription(JointState, self._js_topic, self._on_js, QoSProfile(depth=1000))
+            node.create_subscription(Float64, self._scaling_topic, self._on_scaling, QoSProfile(depth=1000))
             executor = SingleThreadedExecutor(context=self.client.context)
             executor.add_node(node)
             thread = threading.Thread(target=executor.spin, daemon=True)
