@@ -12,7 +12,7 @@ import rclpy
 from builtin_interfaces.msg import Duration
 from control_msgs.action import FollowJointTrajectory
 from control_msgs.msg import JointTolerance, SpeedScalingFactor
-from rclpy.action import ActionClient
+from rclpy.callback_groups import ReentrantCallbackGroup
 from rclpy.executors import MultiThreadedExecutor, SingleThreadedExecutor
 from rclpy.node import Node
 from rclpy.parameter import Parameter
@@ -22,6 +22,7 @@ from sensor_msgs.msg import JointState
 from std_msgs.msg import Float64
 from trajectory_msgs.msg import JointTrajectory, JointTrajectoryPoint
 
+from ur_glue_planner.action_client import ActionClient
 from ur_sim_driver.node import UrSimNode
 
 TIMEOUT = 30.0  # [s] wall-clock deadline of any single wait
@@ -78,13 +79,16 @@ class SimHarness:
         p = sim.cfg.prefixed
         ctrl = sim.cfg.controller_name
         self.joints = list(sim.sim.joint_names)
-        self.action = ActionClient(client, FollowJointTrajectory, p(f'{ctrl}/follow_joint_trajectory'))
+        # Its own group: a busy subscription of the client node must never hold up goal responses.
+        self.action = ActionClient(client, FollowJointTrajectory, p(f'{ctrl}/follow_joint_trajectory'),
+                                   callback_group=ReentrantCallbackGroup())
         self.topic = client.create_publisher(JointTrajectory, p(f'{ctrl}/joint_trajectory'), 10)
         self.scaling = client.create_publisher(SpeedScalingFactor, p(f'{ctrl}/speed_scaling_input'), 10)
         self.recording: Recording | None = None
         self._js_topic = p('joint_states')
         self._scaling_topic = p('speed_scaling_state_broadcaster/speed_scaling')
         self._recorder: Node | None = None
+        self._listeners: list = []
         wait_for(lambda: self.action.server_is_ready(), what='the FollowJointTrajectory server')
         wait_for(lambda: self.topic.get_subscription_count() > 0, what='the joint_trajectory subscriber')
 
@@ -118,6 +122,25 @@ class SimHarness:
             wait_for(lambda: self.recording.t, what='the first recorded joint state')
             self.recording = Recording()
         return self.recording
+
+    def listen(self, msg_type, topic: str, callback, depth: int = 1000) -> None:
+        """Subscribe `callback` on a node with its own executor and thread for the harness's lifetime."""
+        node = Node(f'test_listener_{len(self._listeners)}', context=self.client.context)
+        node.create_subscription(msg_type, topic, callback, QoSProfile(depth=depth))
+        executor = SingleThreadedExecutor(context=self.client.context)
+        executor.add_node(node)
+        thread = threading.Thread(target=executor.spin, daemon=True)
+        thread.start()
+        self._listeners.append((node, executor, thread))
+
+    def close(self) -> None:
+        """Stop recording and listening."""
+        self.stop_recording()
+        for node, executor, thread in self._listeners:
+            executor.shutdown(timeout_sec=2.0)
+            thread.join(timeout=5.0)
+            node.destroy_node()
+        self._listeners.clear()
 
     def stop_recording(self) -> Recording:
         """Stop recording and return what was recorded."""
@@ -183,7 +206,7 @@ def running_sim(**params) -> Iterator[SimHarness]:
             yield harness
         finally:
             if harness is not None:
-                harness.stop_recording()
+                harness.close()
             sim.shutdown()
             executor.shutdown(timeout_sec=2.0)
             thread.join(timeout=5.0)

@@ -24,7 +24,6 @@ from action_msgs.msg import GoalStatus
 from control_msgs.action import FollowJointTrajectory
 from control_msgs.msg import JointTolerance
 from rcl_interfaces.msg import Log
-from rclpy.action import ActionClient
 from rclpy.context import Context
 from rclpy.executors import SingleThreadedExecutor
 from rclpy.node import Node
@@ -33,6 +32,7 @@ from sensor_msgs.msg import JointState
 from std_msgs.msg import String
 
 from ur_glue_planner import ros_conversions as conv
+from ur_glue_planner.action_client import ActionClient
 from ur_glue_planner.errors import ClientError
 from ur_glue_planner.kinematics import IkResult, Kinematics
 

@@ -11,14 +11,25 @@ publish every 2 ms. The two processes exchange the small messages below over a p
 
 The simulated time is shared through a double in shared memory, written by the simulation every cycle and read
 by the gateway's validation (stamps in the past, stamps far in the future).
+
+The gateway is started as ``python -m ur_sim_driver.trajectory_gateway`` with the pipe (a socket pair) and the
+shared memory (a memfd) handed over as file descriptors, not through multiprocessing's spawn, which re-imports
+the caller's main module: a user's plain script that builds a UrSimNode without an ``if __name__`` guard would
+start itself again.
 """
 from __future__ import annotations
 
-import multiprocessing
+import mmap
+import os
 import queue
+import socket
+import struct
+import subprocess
+import sys
 import threading
 from collections.abc import Callable, Hashable
 from dataclasses import dataclass
+from multiprocessing.connection import Connection
 
 import numpy as np
 
@@ -109,15 +120,17 @@ class GatewayLink:
     """
 
     def __init__(self, config: GatewayConfig, on_message: Callable[[object], None]) -> None:
-        # spawn, not fork: the parent runs DDS threads that a forked child must not inherit.
-        ctx = multiprocessing.get_context('spawn')
-        self.sim_time = ctx.Value('d', 0.0, lock=False)
-        self._conn, child_conn = ctx.Pipe(duplex=True)
-        from ur_sim_driver.trajectory_gateway import run_gateway
-        self.process = ctx.Process(target=run_gateway, args=(config, child_conn, self.sim_time),
-                                   name=f'{config.node_name}_gateway', daemon=True)
-        self.process.start()
-        child_conn.close()
+        parent_end, child_end = socket.socketpair()
+        time_fd = os.memfd_create('ur_sim_time')
+        os.ftruncate(time_fd, 8)
+        self._time = mmap.mmap(time_fd, 8)
+        self.process = subprocess.Popen(
+            [sys.executable, '-m', 'ur_sim_driver.trajectory_gateway', str(child_end.fileno()), str(time_fd)],
+            pass_fds=(child_end.fileno(), time_fd))
+        child_end.close()
+        os.close(time_fd)
+        self._conn = Connection(parent_end.detach())
+        self._conn.send(config)
         self._on_message = on_message
         self._outbox: queue.SimpleQueue = queue.SimpleQueue()
         self._closed = threading.Event()
@@ -125,6 +138,10 @@ class GatewayLink:
         self._sender = threading.Thread(target=self._send, name='gateway_send', daemon=True)
         self._receiver.start()
         self._sender.start()
+
+    def set_sim_time(self, t: float) -> None:
+        """Publish the simulated time [s] to the gateway (every control cycle)."""
+        struct.pack_into('d', self._time, 0, t)
 
     def send(self, message: object) -> None:
         """Queue a message for the gateway; never blocks (the simulation loop calls this)."""
@@ -153,9 +170,11 @@ class GatewayLink:
         self._closed.set()
         self._outbox.put(STOP)
         self._sender.join(timeout=timeout)
-        self.process.join(timeout=timeout)
-        if self.process.is_alive():
+        try:
+            self.process.wait(timeout=timeout)
+        except subprocess.TimeoutExpired:
             self.process.terminate()
-            self.process.join(timeout=timeout)
+            self.process.wait(timeout=timeout)
         self._receiver.join(timeout=timeout)  # the child's end is closed now: recv() has seen EOF
         self._conn.close()
+        self._time.close()

@@ -216,7 +216,7 @@ class UrSimNode(Node):
             token = self.jtc.active_token
             feedback_due = token is not None and self._cycle % self._feedback_every == 0
             robot_factor, total_factor = self.jtc.scaling.factor, self.jtc.scaling.total
-        self.gateway.sim_time.value = self.sim.time
+        self.gateway.set_sim_time(self.sim.time)
         self._publish(state, sample, tau, robot_factor, total_factor)
         if feedback_due:
             self._publish_feedback(token, state, sample)

@@ -11,8 +11,12 @@ INVALID_GOAL "Current goal preempted by new incoming action.".
 """
 from __future__ import annotations
 
+import mmap
 import signal
+import struct
+import sys
 import threading
+from multiprocessing.connection import Connection
 
 import rclpy
 from control_msgs.action import FollowJointTrajectory
@@ -49,7 +53,7 @@ class _Waiter:
 class TrajectoryGateway:
     """The controller's action server and topic subscription on `node`, talking to the simulation over `conn`."""
 
-    def __init__(self, node: Node, cfg: GatewayConfig, conn, sim_time) -> None:
+    def __init__(self, node: Node, cfg: GatewayConfig, conn: Connection, sim_time: mmap.mmap) -> None:
         self.node = node
         self.cfg = cfg
         self._conn = conn
@@ -75,7 +79,7 @@ class TrajectoryGateway:
     # ---- validation --------------------------------------------------------------------------------
     def _validate(self, cmd: CommandArrays, what: str) -> str | None:
         cfg = self.cfg
-        now = float(self._sim_time.value)
+        (now,) = struct.unpack_from('d', self._sim_time, 0)
         strict = cfg.strict_limits
         reason = validate_trajectory(
             cmd, joint_names_config=cfg.joints, now=now, q_min=cfg.q_min if strict else None,
@@ -207,11 +211,14 @@ class TrajectoryGateway:
                 pass
 
 
-def run_gateway(cfg: GatewayConfig, conn, sim_time) -> None:
-    """Entry point of the gateway process (multiprocessing target)."""
+def run_gateway(conn: Connection, sim_time: mmap.mmap) -> None:
+    """Serve the controller's interfaces until the simulation says stop (or its end of the pipe closes)."""
     # The parent stops this process through the pipe; Ctrl-C in a terminal reaches both, and the parent must
     # be the one to decide (it ends the goals first).
     signal.signal(signal.SIGINT, signal.SIG_IGN)
+    import faulthandler
+    faulthandler.register(signal.SIGUSR1)
+    cfg: GatewayConfig = conn.recv()
     rclpy.init(signal_handler_options=SignalHandlerOptions.NO)
     node = Node(cfg.node_name, namespace=cfg.namespace or '/')
     gateway = TrajectoryGateway(node, cfg, conn, sim_time)
@@ -230,3 +237,13 @@ def run_gateway(cfg: GatewayConfig, conn, sim_time) -> None:
         node.destroy_node()
         rclpy.try_shutdown()
         conn.close()
+
+
+def main() -> None:
+    """``python -m ur_sim_driver.trajectory_gateway PIPE_FD TIME_FD``, as GatewayLink starts it."""
+    pipe_fd, time_fd = int(sys.argv[1]), int(sys.argv[2])
+    run_gateway(Connection(pipe_fd), mmap.mmap(time_fd, 8))
+
+
+if __name__ == '__main__':
+    main()
