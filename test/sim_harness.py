@@ -16,7 +16,7 @@ from rclpy.callback_groups import ReentrantCallbackGroup
 from rclpy.executors import MultiThreadedExecutor, SingleThreadedExecutor
 from rclpy.node import Node
 from rclpy.parameter import Parameter
-from rclpy.qos import QoSProfile
+from rclpy.qos import DurabilityPolicy, QoSProfile
 from ros_helpers import ros_context
 from sensor_msgs.msg import JointState
 from std_msgs.msg import Float64
@@ -123,10 +123,14 @@ class SimHarness:
             self.recording = Recording()
         return self.recording
 
-    def listen(self, msg_type, topic: str, callback, depth: int = 1000) -> None:
-        """Subscribe `callback` on a node with its own executor and thread for the harness's lifetime."""
+    def listen(self, msg_type, topic: str, callback, depth: int = 1000, latched: bool = False) -> None:
+        """Subscribe `callback` on a node with its own executor and thread for the harness's lifetime.
+
+        `latched`: transient local, so that what was published before the subscription matched arrives too.
+        """
         node = Node(f'test_listener_{len(self._listeners)}', context=self.client.context)
-        node.create_subscription(msg_type, topic, callback, QoSProfile(depth=depth))
+        durability = DurabilityPolicy.TRANSIENT_LOCAL if latched else DurabilityPolicy.VOLATILE
+        node.create_subscription(msg_type, topic, callback, QoSProfile(depth=depth, durability=durability))
         executor = SingleThreadedExecutor(context=self.client.context)
         executor.add_node(node)
         thread = threading.Thread(target=executor.spin, daemon=True)

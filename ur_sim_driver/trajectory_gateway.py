@@ -11,6 +11,7 @@ INVALID_GOAL "Current goal preempted by new incoming action.".
 """
 from __future__ import annotations
 
+import faulthandler
 import mmap
 import signal
 import struct
@@ -216,8 +217,7 @@ def run_gateway(conn: Connection, sim_time: mmap.mmap) -> None:
     # The parent stops this process through the pipe; Ctrl-C in a terminal reaches both, and the parent must
     # be the one to decide (it ends the goals first).
     signal.signal(signal.SIGINT, signal.SIG_IGN)
-    import faulthandler
-    faulthandler.register(signal.SIGUSR1)
+    faulthandler.register(signal.SIGUSR1)  # `kill -USR1 <pid>` prints every thread's stack, for a hang
     cfg: GatewayConfig = conn.recv()
     rclpy.init(signal_handler_options=SignalHandlerOptions.NO)
     node = Node(cfg.node_name, namespace=cfg.namespace or '/')
