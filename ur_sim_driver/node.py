@@ -32,6 +32,7 @@ from ur_sim_driver import conversions as conv
 from ur_sim_driver.errors import TrajectoryError, UrSimError
 from ur_sim_driver.gateway_link import Cancel, Canceled, Ended, Feedback, GatewayConfig, GatewayLink, Start
 from ur_sim_driver.jtc import Outcome, TrajectoryController
+from ur_sim_driver.memory import use_mmap_for_large_blocks
 from ur_sim_driver.sim_config import SimConfig, sim_config_from_params
 from ur_sim_driver.simulator import Simulator
 from ur_sim_driver.tolerances import default_tolerances
@@ -59,6 +60,7 @@ class UrSimNode(Node):
             {name: p.value for name, p in self._parameters.items() if name != 'use_sim_time'})
         self._warn_unknown_parameters()
         self.sim = Simulator(self.cfg)
+        use_mmap_for_large_blocks()  # long trajectories' arrays go back to the system when dropped
         # The controller's joints carry the tf_prefix, as in the driver's ur_controllers.yaml.
         self.joints = self.sim.joint_names
         self._defaults = default_tolerances(

@@ -34,9 +34,12 @@ from ur_sim_driver.cdr import parse_joint_trajectory
 from ur_sim_driver.command_arrays import CommandArrays, from_points
 from ur_sim_driver.errors import TrajectoryError
 from ur_sim_driver.gateway_link import STOP, Cancel, Canceled, Ended, Feedback, GatewayConfig, Start
+from ur_sim_driver.memory import release_memory, use_mmap_for_large_blocks
 from ur_sim_driver.tolerances import resolve_tolerances
 from ur_sim_driver.validation import validate_trajectory
 
+# From this many points on, the memory of a received trajectory is handed back to the system when it is done.
+LARGE_TRAJECTORY = 10_000
 # A start stamp this far ahead of the simulated clock is accepted (upstream does) but logged [s].
 FAR_FUTURE = 5.0
 _SHUTDOWN = Ended(None, result_codes.INVALID_GOAL, 'ur_sim is shutting down.')
@@ -146,8 +149,13 @@ class TrajectoryGateway:
         with self._lock:
             self._waiters.pop(token, None)
             self._handles.pop(token, None)
-        # Drop our reference to the (possibly huge) request: rclpy keeps the handle until the result expires.
+        # Drop the (possibly huge) request: rclpy keeps the handle until the result expires (15 min).
+        large = len(goal_handle.request.trajectory.points) >= LARGE_TRAJECTORY
         goal_handle._goal_request = None
+        if large:
+            # Once more a little later: rclpy lets go of the message's last references after this returns.
+            release_memory()
+            threading.Timer(1.0, release_memory).start()
         if waiter.canceled:
             goal_handle.canceled()
             self.node.get_logger().info('Goal canceled; holding the measured position')
@@ -218,6 +226,7 @@ def run_gateway(conn: Connection, sim_time: mmap.mmap) -> None:
     # be the one to decide (it ends the goals first).
     signal.signal(signal.SIGINT, signal.SIG_IGN)
     faulthandler.register(signal.SIGUSR1)  # `kill -USR1 <pid>` prints every thread's stack, for a hang
+    use_mmap_for_large_blocks()
     cfg: GatewayConfig = conn.recv()
     rclpy.init(signal_handler_options=SignalHandlerOptions.NO)
     node = Node(cfg.node_name, namespace=cfg.namespace or '/')
