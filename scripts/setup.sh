@@ -65,7 +65,7 @@ if [ ! -f "$STAMPS/wheels-$req_hash" ]; then
   # point them at this interpreter so that interface packages can be built against the venv.
   py_inc="$("$VPY" -c 'import sysconfig; print(sysconfig.get_paths()["include"])')"
   np_inc="$("$VPY" -c 'import numpy; print(numpy.get_include())')"
-  grep -rlE --include='*.cmake' '/opt/python/cp3[0-9]+-cp3[0-9]+' "$VENV/share" 2>/dev/null | while read -r f; do
+  { grep -rlE --include='*.cmake' '/opt/python/cp3[0-9]+-cp3[0-9]+' "$VENV/share" 2>/dev/null || true; } | while read -r f; do
     sed -i -E "s#/opt/python/cp3[0-9]+-cp3[0-9]+/include/python3\.[0-9]+#${py_inc}#g; s#/opt/python/cp3[0-9]+-cp3[0-9]+/lib/python3\.[0-9]+/site-packages/numpy/_core/include#${np_inc}#g" "$f"
   done
   touch "$VENV/COLCON_IGNORE"
