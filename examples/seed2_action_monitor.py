@@ -22,7 +22,8 @@ def run(ur, out_dir) -> dict:
                                 feedback_callback=lambda fb: feedback_errors.append(max(map(abs, fb.error.positions))))
     print('goal sent; the script keeps running while the robot moves')
     outcome = goal.wait()
-    ur.sleep(max(0.0, t0 - ur.now()) + seed.T_OFFSET)
+    # Until the joint states received reach the trajectory's end (the result can arrive before the last of them).
+    ur.sleep(max(0.0, t0 + seed.VIA_TIMES[-1] - ur.now()) + seed.T_OFFSET)
     rec = ur.stop_recording(recorder)
     pngs = plot_joint_states(rec.t, rec.q, rec.qd, ur.joint_names, out_dir, 'action_monitor',
                              'FollowJointTrajectory (non-blocking)')
