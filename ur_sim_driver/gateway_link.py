@@ -126,7 +126,9 @@ class GatewayLink:
         self._time = mmap.mmap(time_fd, 8)
         self.process = subprocess.Popen(
             [sys.executable, '-m', 'ur_sim_driver.trajectory_gateway', str(child_end.fileno()), str(time_fd)],
-            pass_fds=(child_end.fileno(), time_fd))
+            # Its own session: a Ctrl-C (or a test's SIGINT to ur_sim's process group) must not interrupt it while
+            # it imports; ur_sim stops it through the pipe, and it exits on its own when the pipe closes.
+            pass_fds=(child_end.fileno(), time_fd), start_new_session=True)
         child_end.close()
         os.close(time_fd)
         self._conn = Connection(parent_end.detach())
