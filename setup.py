@@ -28,7 +28,7 @@ setup(
     entry_points={
         'console_scripts': [
             'ur_sim = ur_sim_driver.node:main',
-            'ur_glue_planner = ur_glue_planner.node:main',
+            'ur_glue_planner = ur_glue_planner.execution.node:main',
         ],
     },
 )

@@ -18,11 +18,11 @@ import rclpy
 from rclpy.node import Node
 from rclpy.signals import SignalHandlerOptions
 
-from ur_glue_planner.client import GoalOutcome, URClient
 from ur_glue_planner.errors import ClientError, JobError, PlanningError
+from ur_glue_planner.execution.client import GoalOutcome, URClient
 from ur_glue_planner.job import default_job_path, load_job
-from ur_glue_planner.plan import GluePlan, plan_job
-from ur_glue_planner.report import Executed, write_report
+from ur_glue_planner.motion.plan import GluePlan, plan_job
+from ur_glue_planner.report.glue_report import Executed, write_report
 
 RECORD_RATE = 50.0  # [Hz] nominal; the report uses every message received (exact stamps)
 MESSAGES = {
