@@ -3,7 +3,8 @@
 #   1. .venv/ with the pinned wheels (ROS 2 Jazzy from PyPI, MuJoCo, Pinocchio, Ruckig, ...);
 #   2. interfaces/control_msgs built with colcon into install/, only if no control_msgs is importable;
 #   3. this ament_python package built with colcon (--symlink-install) into install/, so that
-#      install/ur_sim_driver/lib/ur_sim_driver/<exe> and the ament index entry exist for `ros2 run`.
+#      install/ur_sim_driver/lib/ur_sim_driver/<exe> and the ament index entry exist for `ros2 run`;
+#   4. Debian's headless-capable chromium for the studio's browser tests, if missing (apt-get, as root).
 # A second run only checks stamps and finishes in seconds.
 set -euo pipefail
 ROOT="$(cd "$(dirname "${BASH_SOURCE[0]}")/.." && pwd)"
@@ -41,6 +42,19 @@ ensure_build_tools() {
   fi
 }
 
+# The studio's browser tests drive Debian's chromium through Playwright (which cannot download a browser here).
+# Not needed to run anything else, so a missing browser without root is a note, not an error.
+ensure_chromium() {
+  command -v chromium >/dev/null 2>&1 && return 0
+  if [ "$(id -u)" = 0 ] && command -v apt-get >/dev/null 2>&1; then
+    log "installing chromium with apt-get (for the studio's browser tests)"
+    DEBIAN_FRONTEND=noninteractive apt-get update -qq
+    DEBIAN_FRONTEND=noninteractive apt-get install -y -qq --no-install-recommends chromium fonts-dejavu-core >/dev/null
+  else
+    log "note: no chromium; the studio's browser tests need it (sudo apt-get install chromium)"
+  fi
+}
+
 hash_of() { cat "$@" | sha256sum | cut -c1-16; }
 
 PY="$(pick_python)"
@@ -64,7 +78,8 @@ if [ ! -f "$STAMPS/wheels-$req_hash" ]; then
   # point them at this interpreter so that interface packages can be built against the venv.
   py_inc="$("$VPY" -c 'import sysconfig; print(sysconfig.get_paths()["include"])')"
   np_inc="$("$VPY" -c 'import numpy; print(numpy.get_include())')"
-  grep -rlE --include='*.cmake' '/opt/python/cp3[0-9]+-cp3[0-9]+' "$VENV/share" 2>/dev/null | while read -r f; do
+  # (re-installing into an already patched venv leaves grep nothing to find: not an error under pipefail)
+  { grep -rlE --include='*.cmake' '/opt/python/cp3[0-9]+-cp3[0-9]+' "$VENV/share" 2>/dev/null || true; } | while read -r f; do
     sed -i -E "s#/opt/python/cp3[0-9]+-cp3[0-9]+/include/python3\.[0-9]+#${py_inc}#g; s#/opt/python/cp3[0-9]+-cp3[0-9]+/lib/python3\.[0-9]+/site-packages/numpy/_core/include#${np_inc}#g" "$f"
   done
   touch "$VENV/COLCON_IGNORE"
@@ -106,6 +121,9 @@ if [ ! -f "$STAMPS/package-$pkg_hash" ] || [ ! -x "$ROOT/install/ur_sim_driver/l
   touch "$STAMPS/package-$pkg_hash"
   source "$ROOT/scripts/env.bash"
 fi
+
+# --- 4. browser for the studio's tests ------------------------------------------------------------
+ensure_chromium
 
 python -c 'import rclpy, control_msgs.action, ur_sim_driver, ur_glue_planner' \
   || { echo "error: the environment does not import; see log/" >&2; exit 1; }
