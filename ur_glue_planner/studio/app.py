@@ -37,6 +37,7 @@ from ur_sim_driver.description.tool import get_tool
 from ur_sim_driver.description.urdf import build_urdf
 
 LOOP_RATE = 60.0  # [Hz] page updates: playback, live robot
+INITIAL_CAMERA = ((0.35, -0.75, 1.25), (0.0, 0.45, 0.25))  # [m] position, look-at
 SHOW_ABOVE = 0.002  # [m] paths are drawn this far above the glass so that it does not hide them
 KEYS = {'arrowup': 'up', 'arrowdown': 'down', 'arrowleft': 'left', 'arrowright': 'right', 'C': 'c', 'N': 'n'}
 HELP = ('**Keys** (seed 1): Up/Down rotate the tool about X, Left/Right about Y, by the step; '
@@ -84,10 +85,11 @@ class Studio:
         self._live_stamp = None
         self._trail: list[np.ndarray] = []
         self._trail_drawn = 0
-        self._trail_frame = None
+        self._trail_pieces: list = []
         self._gizmo = None
         self.live_updates = 0
         self._build_gui(job_path is not None)
+        self.server.on_client_connect(self._on_connect)
         if job_path is not None:
             self.load(job_path)
         self._stop = threading.Event()
@@ -100,6 +102,12 @@ class Studio:
         with self._lock:
             self.messages.append(text)
             self._status.content = '  \n'.join(reversed(self.messages[-6:]))
+
+    def _on_connect(self, client) -> None:
+        # A view of the cell from the front left, above the glass (the default view looks from far away).
+        client.camera.up_direction = (0.0, 0.0, 1.0)
+        client.camera.position = INITIAL_CAMERA[0]
+        client.camera.look_at = INITIAL_CAMERA[1]
 
     # ---- GUI ---------------------------------------------------------------------------------------------------
     def _build_gui(self, with_job: bool) -> None:
@@ -187,7 +195,8 @@ class Studio:
         pose = glass_pose(self.sjob.job.windshield)
         self._glass = self.server.scene.add_mesh_simple('/glass', mesh.vertices, mesh.faces, color=(150, 190, 230),
                                                         opacity=0.7, side='double', wxyz=sv.wxyz(pose[:3, :3]),
-                                                        position=pose[:3, 3])
+                                                        position=pose[:3, 3], cast_shadow=False,
+                                                        receive_shadow=False)
         self._glass.on_click(self._on_glass_click)
 
     def _bead_branch(self) -> np.ndarray:
@@ -283,7 +292,8 @@ class Studio:
                 selected = k == self.teach.selected
                 marker = self.server.scene.add_icosphere(
                     f'/waypoints/wp_{k}', radius=sv.MARKER_RADIUS * (1.6 if selected else 1.0),
-                    color=sv.SELECTED if selected and color == sv.GREEN else color, position=wp.position)
+                    color=sv.SELECTED if selected and color == sv.GREEN else color, position=wp.position,
+                    subdivisions=2, cast_shadow=False, receive_shadow=False)
                 marker.on_click(lambda _, i=k: self._edit(lambda s: s.select(i)))
                 label = self.server.scene.add_label(f'/waypoints/label_{k}', str(k + 1),
                                                     position=np.array(wp.position) + [0.0, 0.0, 0.02])
@@ -475,6 +485,9 @@ class Studio:
     def _reset_trail(self) -> None:
         self._trail = []
         self._trail_drawn = 0
+        for piece in self._trail_pieces:
+            piece.remove()
+        self._trail_pieces = []
 
     def _update_live(self) -> None:
         urdf = self.live.urdf()
@@ -502,11 +515,14 @@ class Studio:
         return 'tool0'
 
     def _draw_trail(self) -> None:
+        # Only the new part is sent, as its own piece: the page keeps the earlier pieces.
         if len(self._trail) < 2 or len(self._trail) == self._trail_drawn:
             return
+        start = max(self._trail_drawn - 1, 0)
+        segs = sv.polyline_segments(np.array(self._trail[start:]))
+        self._trail_pieces.append(self.server.scene.add_line_segments(
+            f'/executed/piece_{len(self._trail_pieces)}', segs, (230, 30, 30), thickness=0.003))
         self._trail_drawn = len(self._trail)
-        segs = sv.polyline_segments(np.array(self._trail))
-        self.server.scene.add_line_segments('/executed', segs, (230, 30, 30), thickness=0.003)
 
     def _update_run_gui(self) -> None:
         if self.sjob is None or self.live is None or not self.live.running:

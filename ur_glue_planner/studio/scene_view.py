@@ -36,7 +36,7 @@ class RobotView:
         for k, shape in enumerate(robot.shapes):
             color = tuple(tint) if tint is not None else shape.color
             server.scene.add_mesh_simple(f'{root}/{shape.link}/shape_{k}', shape.mesh.vertices, shape.mesh.faces,
-                                         color=color, opacity=opacity, flat_shading=False)
+                                         color=color, opacity=opacity, cast_shadow=False, receive_shadow=False)
 
     def show(self, names: Sequence[str], q: Sequence[float]) -> None:
         """Put the links at joint positions ``q`` (by joint ``names``)."""

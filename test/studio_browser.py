@@ -1,0 +1,101 @@
+"""Helpers for the studio's browser tests: Debian's chromium driven by Playwright, the page's camera, screenshots."""
+from __future__ import annotations
+
+import shutil
+import time
+from pathlib import Path
+
+import numpy as np
+
+CHROMIUM = '/usr/bin/chromium'
+# Flags that work headless on this kind of machine (no GPU, no display, no network but loopback).
+CHROMIUM_ARGS = ['--headless', '--no-sandbox', '--disable-gpu', '--disable-quic', '--no-first-run',
+                 '--disable-background-networking', '--disable-component-update', '--disable-sync']
+VIEWPORT = {'width': 1024, 'height': 640}
+SHOTS = Path(__file__).resolve().parents[1] / 'out' / 'studio_test'
+TIMEOUT = 60.0  # [s] deadline of any single wait
+
+
+def chromium_path() -> str:
+    """The browser, or a clear failure naming the fix."""
+    if not Path(CHROMIUM).is_file():
+        found = shutil.which('chromium')
+        if found is None:
+            raise RuntimeError('no chromium: run `make setup` as root (it installs Debian\'s chromium) or '
+                               '`sudo apt-get install chromium`')
+        return found
+    return CHROMIUM
+
+
+def wait_until(condition, what: str, timeout: float = TIMEOUT, poll: float = 0.02):
+    """Poll ``condition()`` until it returns a truthy value (returned) or the deadline passes (TimeoutError)."""
+    deadline = time.monotonic() + timeout
+    while True:
+        value = condition()
+        if value:
+            return value
+        if time.monotonic() > deadline:
+            raise TimeoutError(f'timed out after {timeout:.0f} s waiting for {what}')
+        time.sleep(poll)
+
+
+def set_camera(client, position, look_at, up=(0.0, 0.0, 1.0), timeout: float = TIMEOUT) -> None:
+    """Put the page's camera at ``position`` looking at ``look_at`` and wait until the page reports it back."""
+    seen = []
+    client.camera.on_update(lambda cam: seen.append((np.array(cam.position), np.array(cam.look_at))))
+    client.camera.up_direction = up
+    client.camera.position = position
+    client.camera.look_at = look_at
+    wait_until(lambda: any(np.allclose(p, position, atol=1e-6) and np.allclose(a, look_at, atol=1e-6)
+                           for p, a in list(seen)), 'the page to take the camera pose', timeout)
+
+
+def pixel_ray(client, x: float, y: float, width: int, height: int) -> tuple[np.ndarray, np.ndarray]:
+    """World ray (origin, unit direction) through pixel (x, y) of a ``width`` x ``height`` canvas, from the
+    camera's pose and vertical field of view (a pinhole camera, as three.js renders)."""
+    cam = client.camera
+    position, look_at = np.array(cam.position), np.array(cam.look_at)
+    forward = (look_at - position) / np.linalg.norm(look_at - position)
+    right = np.cross(forward, cam.up_direction)
+    right /= np.linalg.norm(right)
+    up = np.cross(right, forward)
+    half = np.tan(cam.fov / 2.0)
+    ndc_x, ndc_y = 2.0 * x / width - 1.0, 1.0 - 2.0 * y / height
+    d = forward + ndc_x * half * (width / height) * right + ndc_y * half * up
+    return position, d / np.linalg.norm(d)
+
+
+def project(client, point, width: int, height: int) -> tuple[float, float]:
+    """Pixel (x, y) of a world point in the page's camera (inverse of :func:`pixel_ray`)."""
+    cam = client.camera
+    position, look_at = np.array(cam.position), np.array(cam.look_at)
+    forward = (look_at - position) / np.linalg.norm(look_at - position)
+    right = np.cross(forward, cam.up_direction)
+    right /= np.linalg.norm(right)
+    up = np.cross(right, forward)
+    v = np.asarray(point, dtype=float) - position
+    half = np.tan(cam.fov / 2.0)
+    ndc_x = (v @ right) / (v @ forward) / (half * width / height)
+    ndc_y = (v @ up) / (v @ forward) / half
+    return (ndc_x + 1.0) * width / 2.0, (1.0 - ndc_y) * height / 2.0
+
+
+def screenshot(page, name: str) -> Path:
+    """Write out/studio_test/<name>.png and check that it is not blank (a drawn page has many colours)."""
+    SHOTS.mkdir(parents=True, exist_ok=True)
+    path = SHOTS / f'{name}.png'
+    page.screenshot(path=str(path))
+    from PIL import Image
+    image = np.asarray(Image.open(path).convert('RGB')).astype(float)
+    colours = len(np.unique(image.reshape(-1, 3)[::7], axis=0))
+    assert image.std() > 10.0 and colours > 200, f'{path} is blank (pixel std {image.std():.1f}, {colours} colours)'
+    return path
+
+
+def dismiss_toasts(page) -> None:
+    """Close the browser's 'software WebGL' notification so that it covers nothing."""
+    for button in page.locator('.mantine-Notification-closeButton, button[class*="Notification"]').all():
+        try:
+            button.click(timeout=2000)
+        except Exception:  # already gone
+            pass

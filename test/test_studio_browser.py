@@ -1,0 +1,258 @@
+"""The studio in a real browser (Debian's headless chromium, driven by Playwright) against an in-process ur_sim.
+
+Stages, each with a screenshot under out/studio_test/: a click on the glass adds a waypoint at the surface point
+under that pixel; the keys turn a waypoint's orientation by the step and C saves it; Save writes the taught job;
+Plan shows the seed's figures; Run executes on ur_sim and reports success while the page shows the robot live;
+Stop cancels; without a job the studio is a live viewer.
+"""
+from __future__ import annotations
+
+import os
+import socket
+import time
+
+import numpy as np
+import pytest
+import yaml
+from sim_harness import running_sim
+from studio_browser import (
+    CHROMIUM_ARGS,
+    VIEWPORT,
+    chromium_path,
+    dismiss_toasts,
+    pixel_ray,
+    project,
+    screenshot,
+    set_camera,
+    wait_until,
+)
+
+from ur_glue_planner.studio.app import Studio
+from ur_glue_planner.studio.ros_link import LiveRobot
+from ur_sim_driver.paths import config_dir
+
+JOB = config_dir() / 'glue_job.yaml'
+RTF = 1.0
+
+
+def _free_port() -> int:
+    with socket.socket() as s:
+        s.bind(('127.0.0.1', 0))
+        return s.getsockname()[1]
+
+
+@pytest.fixture(scope='module')
+def sim():
+    params = yaml.safe_load((config_dir() / 'ur_sim_windshield.yaml').read_text())['/**']['ros__parameters']
+    # Real time: as fast as possible, the in-process simulation would leave the page's server little CPU.
+    params['real_time_factor'] = RTF
+    with running_sim(**params) as h:
+        yield h
+
+
+@pytest.fixture(scope='module')
+def browser():
+    from playwright.sync_api import sync_playwright
+    pw = sync_playwright().start()
+    b = pw.chromium.launch(executable_path=chromium_path(), args=CHROMIUM_ARGS)
+    yield b
+    b.close()
+    pw.stop()
+
+
+def _open(browser, studio: Studio):
+    page = browser.new_page(viewport=VIEWPORT)
+    # Arrival times of the page's websocket messages (viser's socket lives in a web worker, which the DevTools
+    # network domain of the page does not see; Playwright reports its frames as the test pumps events).
+    page.ws_frames = []
+    page.on('websocket', lambda ws: ws.on('framereceived', lambda _: page.ws_frames.append(time.monotonic())))
+    before = set(studio.server.get_clients())
+    page.goto(f'http://127.0.0.1:{studio.server.get_port()}')
+    new = wait_until(lambda: sorted(set(studio.server.get_clients()) - before), 'the page to connect')  # ids from 0
+    client = studio.server.get_clients()[new[0]]
+    wait_until(lambda: page.get_by_text('Connected').count() > 0 or page.locator('canvas').count() > 0,
+               'the page to draw')
+    dismiss_toasts(page)
+    return page, client
+
+
+@pytest.fixture(scope='module')
+def studio(sim, tmp_path_factory):
+    live = LiveRobot('', context=sim.client.context)
+    s = Studio(JOB, port=_free_port(), live=live, save_path=tmp_path_factory.mktemp('studio') / 'taught.yaml')
+    yield s
+    s.close()
+    live.close()
+
+
+@pytest.fixture(scope='module')
+def page(browser, studio):
+    page, client = _open(browser, studio)
+    page.studio_client = client
+    yield page
+    page.close()
+
+
+def _pump_until(page, condition, what: str, timeout: float) -> None:
+    """Wait with the browser's event loop turning, so that websocket events are timed as they arrive."""
+    deadline = time.monotonic() + timeout
+    while not condition():
+        if time.monotonic() > deadline:
+            raise TimeoutError(f'timed out after {timeout:.0f} s waiting for {what}')
+        page.wait_for_timeout(10)
+
+
+def _tab(page, name: str) -> None:
+    page.get_by_role('tab', name=name).click()
+
+
+def test_click_on_the_glass_adds_a_waypoint_at_the_surface_point(studio, page):
+    client = page.studio_client
+    glass = studio.glass
+    target = glass.surface_point(0.05, 0.3)
+    normal = glass.surface_normal(0.05, 0.3)
+    # A camera 0.6 m above the glass looking down its normal: one pixel is about 1 mm there.
+    set_camera(client, target + 0.6 * normal + [0.0, -0.05, 0.0], target, up=(0.0, 1.0, 0.0))
+    w, h = VIEWPORT['width'], VIEWPORT['height']
+    x, y = (round(v) for v in project(client, target, w, h))
+    origin, direction = pixel_ray(client, x, y, w, h)
+    hit = target  # where that pixel's ray meets the glass: the surface point nearest the ray, iterated
+    for _ in range(5):
+        t = np.dot(hit - origin, direction)
+        hit = studio.glass.project((origin + t * direction)[None])[1][0]
+    n_before = len(studio.teach.waypoints)
+    studio._edit(lambda s: s.select(0))
+    # The page may still be loading the scene when the camera is set; a click that reaches no mesh is lost, so
+    # click again until the studio has the waypoint (a click that reached the glass is answered within ms).
+    deadline = time.monotonic() + 60.0
+    while len(studio.teach.waypoints) == n_before:
+        assert time.monotonic() < deadline, 'the click never reached the studio'
+        page.mouse.move(x, y)
+        page.mouse.click(x, y)
+        try:
+            wait_until(lambda: len(studio.teach.waypoints) > n_before, 'the new waypoint', timeout=5.0)
+        except TimeoutError:
+            assert not any('missed the glass' in m for m in studio.messages), studio.messages
+    assert len(studio.teach.waypoints) == n_before + 1
+    added = np.array(studio.teach.waypoints[1].position)  # after the selected (first) one
+    assert studio.teach.selected == 1
+    assert np.linalg.norm(added - hit) < 0.002, f'{added} vs expected {hit}'
+    _, foot, _ = studio.glass.project(added[None])
+    assert np.linalg.norm(foot[0] - added) < 0.001  # on the glass
+    wait_until(lambda: page.get_by_text('Waypoint 2').count() > 0, 'the page to show the new waypoint')
+    screenshot(page, '1_teach_click')
+
+
+def test_keys_turn_the_orientation_by_the_step_and_c_saves(studio, page):
+    set_camera(page.studio_client, (0.25, -0.55, 1.15), (0.0, 0.5, 0.2))
+    studio._edit(lambda s: s.select(4))
+    step = page.get_by_label('Step [deg]')
+    step.fill('2.5')
+    step.press('Enter')
+    wait_until(lambda: studio.teach.step_deg == 2.5, 'the step setting')
+    # Keys go to the page, not to the step field (where the arrows would change the number).
+    page.evaluate('document.activeElement && document.activeElement.blur()')
+    before = studio.teach.waypoints[4]
+    for key in ('ArrowUp', 'ArrowUp', 'ArrowUp', 'ArrowLeft'):
+        page.keyboard.press(key)
+    wait_until(lambda: np.isclose(studio.teach.waypoints[4].orientation_zyx[2] - before.orientation_zyx[2],
+                                  np.radians(7.5)), 'three Up presses')
+    wait_until(lambda: np.isclose(studio.teach.waypoints[4].orientation_zyx[1] - before.orientation_zyx[1],
+                                  -np.radians(2.5)), 'one Left press')
+    assert not studio.teach.waypoints[4].saved
+    assert 4 in studio.teach.skipped_indices()
+    page.keyboard.press('c')
+    wait_until(lambda: studio.teach.waypoints[4].saved, 'C to save the orientation')
+    page.keyboard.press('n')
+    wait_until(lambda: studio.teach.selected == 5, 'N to select the next waypoint')
+    zyx = studio.teach.waypoints[4].orientation_zyx
+    assert zyx[0] == before.orientation_zyx[0]
+    assert zyx[1] == pytest.approx(before.orientation_zyx[1] - np.radians(2.5), abs=1e-12)
+    assert zyx[2] == pytest.approx(before.orientation_zyx[2] + np.radians(7.5), abs=1e-12)
+    screenshot(page, '2_teach_keys')
+
+
+def test_save_writes_the_taught_job(studio, page):
+    _tab(page, 'File')
+    path = studio._save_default
+    if os.path.exists(path):
+        os.remove(path)
+    page.get_by_role('button', name='Save', exact=True).click()
+    wait_until(lambda: os.path.exists(path), 'the saved job file')
+    raw = wait_until(lambda: yaml.safe_load(open(path).read()), 'the job file content')
+    positions, zyx = studio.teach.planned_arrays()
+    assert np.array_equal(np.array(raw['path']['waypoints']), positions)
+    assert np.array_equal(np.array(raw['path']['orientation_zyx']), zyx)
+    assert len(positions) == 23 - 1  # the clicked waypoint was never saved with C: skipped
+    original = yaml.safe_load(JOB.read_text())
+    assert {k: v for k, v in raw.items() if k != 'path'} == {k: v for k, v in original.items() if k != 'path'}
+    row = studio.teach.planned_indices().index(4)  # the waypoint turned with the keys
+    assert raw['path']['orientation_zyx'][row][2] == pytest.approx(-np.pi / 3 + np.radians(7.5), abs=1e-12)
+    wait_until(lambda: page.get_by_text('saved 22 waypoints').count() > 0, 'the page to confirm the save')
+    screenshot(page, '3_save')
+
+
+def test_plan_shows_the_figures_and_plays(studio, page):
+    _tab(page, 'Plan')
+    page.get_by_role('button', name='Plan', exact=True).click()
+    wait_until(lambda: studio.plan is not None, 'the plan', timeout=120)
+    figures = page.locator('img[src^="blob:"]')  # the figures; viser's own icons are inline SVG
+    wait_until(lambda: figures.count() == 4 and all(img.is_visible() for img in figures.all()), 'the four figures')
+    wait_until(lambda: page.get_by_text('Planned TCP speed').count() > 0, 'the speed figures')
+    page.get_by_role('button', name='play').click()
+    t0 = studio.clock.t
+    wait_until(lambda: studio.clock.t > t0 + 0.5, 'the playback to advance')
+    page.get_by_role('button', name='pause').click()
+    wait_until(lambda: not studio.clock.playing, 'pause')
+    screenshot(page, '4_plan')
+
+
+def test_run_on_ur_sim_succeeds_with_the_robot_live_in_the_page(studio, page, sim):
+    _tab(page, 'Run')
+    page.get_by_role('button', name='Run', exact=True).click()
+    wait_until(lambda: studio.run_progress[0] == 'bead', 'the bead to start', timeout=120)
+    page.wait_for_timeout(1000)  # deliver what arrived while the test was not pumping events, then count
+    page.ws_frames.clear()
+    updates0 = studio.live_updates
+    _pump_until(page, lambda: studio.run_progress[0] != 'bead', 'the bead to end', timeout=120)
+    arrivals = np.array(page.ws_frames)
+    sent = studio.live_updates - updates0
+    wait_until(lambda: not studio.live.running, 'the run to finish', timeout=120)
+    assert studio.run_result is not None and studio.run_result.succeeded, studio.run_result
+    assert studio.run_result.error_code == 0
+    wait_until(lambda: page.get_by_text('Run succeeded').count() > 0, 'the page to report success')
+    assert len(studio._trail) > 200  # the executed tip path, drawn as it went
+    # While the bead ran, the page received the robot's updates at >= 30 per second.
+    span = arrivals[-1] - arrivals[0]
+    per_second = np.histogram(arrivals, bins=np.arange(arrivals[0], arrivals[-1], 1.0))[0]
+    report = (f'{len(arrivals)} messages in {span:.2f} s; per second {per_second}; '
+              f'robot updates sent {sent / span:.1f}/s')
+    assert span > 5.0 and len(arrivals) / span >= 30.0, report
+    assert per_second.min() >= 15, report  # and it never stalled
+    screenshot(page, '5_run')
+
+
+def test_stop_cancels_the_running_goal(studio, page, sim):
+    _tab(page, 'Run')
+    page.get_by_role('button', name='Run', exact=True).click()
+    wait_until(lambda: studio.run_progress[0] is not None, 'the first feedback')
+    page.get_by_role('button', name='Stop', exact=True).click()
+    wait_until(lambda: studio.run_result is not None, 'the run to end', timeout=60)
+    assert not studio.run_result.succeeded and studio.run_result.message.startswith('stopped')
+    wait_until(lambda: sim.sim.jtc.active_token is None, 'the controller to hold')
+
+
+def test_without_a_job_the_studio_is_a_live_viewer(browser, sim):
+    live = LiveRobot('', context=sim.client.context)
+    viewer = Studio(None, port=_free_port(), live=live)
+    try:
+        page, client = _open(browser, viewer)
+        wait_until(lambda: viewer.live_updates > 30, 'live robot updates')
+        assert viewer.sjob is None and viewer._live_view is not None
+        set_camera(client, (1.2, -1.0, 1.0), (0.0, 0.3, 0.4))
+        wait_until(lambda: page.get_by_text('Live viewer').count() > 0, 'the live viewer text')
+        screenshot(page, '6_live_viewer')
+        page.close()
+    finally:
+        viewer.close()
+        live.close()
