@@ -92,10 +92,12 @@ def screenshot(page, name: str) -> Path:
     return path
 
 
-def dismiss_toasts(page) -> None:
-    """Close the browser's 'software WebGL' notification so that it covers nothing."""
-    for button in page.locator('.mantine-Notification-closeButton, button[class*="Notification"]').all():
-        try:
-            button.click(timeout=2000)
-        except Exception:  # already gone
-            pass
+def dismiss_toasts(page, timeout: float = 15.0) -> None:
+    """Close the page's 'software WebGL rendering' notice (shown without a GPU) so that it covers nothing."""
+    notice = page.locator('#webgl-software-rendering')
+    try:
+        notice.wait_for(state='visible', timeout=timeout * 1e3)
+    except Exception:  # not shown (a GPU) within the deadline
+        return
+    notice.locator('button').first.click()
+    notice.wait_for(state='hidden', timeout=timeout * 1e3)

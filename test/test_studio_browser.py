@@ -8,12 +8,17 @@ Stop cancels; without a job the studio is a live viewer.
 from __future__ import annotations
 
 import os
+import signal
 import socket
+import subprocess
+import sys
 import time
+from pathlib import Path
 
 import numpy as np
 import pytest
 import yaml
+from ament_index_python.packages import get_package_prefix
 from sim_harness import running_sim
 from studio_browser import (
     CHROMIUM_ARGS,
@@ -27,7 +32,8 @@ from studio_browser import (
     wait_until,
 )
 
-from ur_glue_planner.studio.app import Studio
+from ur_glue_planner.client import URClient
+from ur_glue_planner.studio.app import INITIAL_CAMERA, Studio
 from ur_glue_planner.studio.ros_link import LiveRobot
 from ur_sim_driver.paths import config_dir
 
@@ -99,7 +105,7 @@ def _pump_until(page, condition, what: str, timeout: float) -> None:
     while not condition():
         if time.monotonic() > deadline:
             raise TimeoutError(f'timed out after {timeout:.0f} s waiting for {what}')
-        page.wait_for_timeout(10)
+        page.wait_for_timeout(50)
 
 
 def _tab(page, name: str) -> None:
@@ -144,7 +150,7 @@ def test_click_on_the_glass_adds_a_waypoint_at_the_surface_point(studio, page):
 
 
 def test_keys_turn_the_orientation_by_the_step_and_c_saves(studio, page):
-    set_camera(page.studio_client, (0.25, -0.55, 1.15), (0.0, 0.5, 0.2))
+    set_camera(page.studio_client, *INITIAL_CAMERA)
     studio._edit(lambda s: s.select(4))
     step = page.get_by_label('Step [deg]')
     step.fill('2.5')
@@ -210,25 +216,12 @@ def test_plan_shows_the_figures_and_plays(studio, page):
 def test_run_on_ur_sim_succeeds_with_the_robot_live_in_the_page(studio, page, sim):
     _tab(page, 'Run')
     page.get_by_role('button', name='Run', exact=True).click()
-    wait_until(lambda: studio.run_progress[0] == 'bead', 'the bead to start', timeout=120)
-    page.wait_for_timeout(1000)  # deliver what arrived while the test was not pumping events, then count
-    page.ws_frames.clear()
-    updates0 = studio.live_updates
-    _pump_until(page, lambda: studio.run_progress[0] != 'bead', 'the bead to end', timeout=120)
-    arrivals = np.array(page.ws_frames)
-    sent = studio.live_updates - updates0
-    wait_until(lambda: not studio.live.running, 'the run to finish', timeout=120)
+    wait_until(lambda: studio.live.running, 'the run to start')
+    wait_until(lambda: not studio.live.running, 'the run to finish', timeout=180)
     assert studio.run_result is not None and studio.run_result.succeeded, studio.run_result
     assert studio.run_result.error_code == 0
     wait_until(lambda: page.get_by_text('Run succeeded').count() > 0, 'the page to report success')
     assert len(studio._trail) > 200  # the executed tip path, drawn as it went
-    # While the bead ran, the page received the robot's updates at >= 30 per second.
-    span = arrivals[-1] - arrivals[0]
-    per_second = np.histogram(arrivals, bins=np.arange(arrivals[0], arrivals[-1], 1.0))[0]
-    report = (f'{len(arrivals)} messages in {span:.2f} s; per second {per_second}; '
-              f'robot updates sent {sent / span:.1f}/s')
-    assert span > 5.0 and len(arrivals) / span >= 30.0, report
-    assert per_second.min() >= 15, report  # and it never stalled
     screenshot(page, '5_run')
 
 
@@ -242,17 +235,55 @@ def test_stop_cancels_the_running_goal(studio, page, sim):
     wait_until(lambda: sim.sim.jtc.active_token is None, 'the controller to hold')
 
 
-def test_without_a_job_the_studio_is_a_live_viewer(browser, sim):
-    live = LiveRobot('', context=sim.client.context)
+def _ur_sim_process() -> subprocess.Popen:
+    exe = Path(get_package_prefix('ur_sim_driver')) / 'lib' / 'ur_sim_driver' / 'ur_sim'
+    return subprocess.Popen([str(exe), '--ros-args', '-p', 'ur_type:=ur5', '-p', 'tool:=dispenser',
+                             '-p', 'namespace:=/live'], start_new_session=True, stdout=subprocess.DEVNULL,
+                            stderr=subprocess.DEVNULL)
+
+
+def test_without_a_job_the_studio_is_a_live_viewer_at_30_fps(browser):
+    # As deployed: the robot (here ur_sim, real time) in its own process, the studio in another; a seed 2 style
+    # namespace. The page must receive the moving robot at >= 30 updates per second.
+    sim = _ur_sim_process()
+    # This process now plays the ur_glue_studio process, which keeps Python's default GIL switch interval
+    # (conftest shortens it for the in-process simulators of the other tests).
+    interval = sys.getswitchinterval()
+    sys.setswitchinterval(0.005)
+    live = LiveRobot('/live')
     viewer = Studio(None, port=_free_port(), live=live)
     try:
         page, client = _open(browser, viewer)
-        wait_until(lambda: viewer.live_updates > 30, 'live robot updates')
-        assert viewer.sjob is None and viewer._live_view is not None
+        wait_until(lambda: viewer._live_view is not None and viewer.live_updates > 10, 'the live robot')
+        assert viewer.sjob is None
         set_camera(client, (1.2, -1.0, 1.0), (0.0, 0.3, 0.4))
+        with URClient(namespace='/live', timeout=30.0) as ur:
+            q0 = ur.joint_state().q
+            goal = ur.send_joint_configuration(q0 + np.array([0.8, 0.3, -0.4, 0.3, 0.5, 0.6]), end_time=8.0,
+                                               wait=False)
+            page.wait_for_timeout(1000)  # deliver what arrived before counting
+            page.ws_frames.clear()
+            updates0 = viewer.live_updates
+            _pump_until(page, lambda: goal.done, 'the move to end', timeout=60)
+            assert goal.wait().succeeded
+        arrivals = np.array(page.ws_frames)
+        span = arrivals[-1] - arrivals[0]
+        per_second = np.histogram(arrivals, bins=np.arange(arrivals[0], arrivals[-1], 1.0))[0]
+        report = (f'{len(arrivals)} messages in {span:.2f} s; per second {per_second}; '
+                  f'robot updates sent {(viewer.live_updates - updates0) / span:.1f}/s')
+        print(report)
+        assert span > 5.0 and len(arrivals) / span >= 30.0, report
+        assert per_second.min() >= 20, report  # and it never stalled
+        assert len(viewer._trail) > 100  # the tip path drawn as it went
         wait_until(lambda: page.get_by_text('Live viewer').count() > 0, 'the live viewer text')
         screenshot(page, '6_live_viewer')
         page.close()
     finally:
         viewer.close()
         live.close()
+        sys.setswitchinterval(interval)
+        os.killpg(sim.pid, signal.SIGINT)
+        try:
+            sim.wait(timeout=20)
+        except subprocess.TimeoutExpired:
+            sim.kill()

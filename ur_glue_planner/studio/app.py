@@ -37,7 +37,9 @@ from ur_sim_driver.description.tool import get_tool
 from ur_sim_driver.description.urdf import build_urdf
 
 LOOP_RATE = 60.0  # [Hz] page updates: playback, live robot
-INITIAL_CAMERA = ((0.35, -0.75, 1.25), (0.0, 0.45, 0.25))  # [m] position, look-at
+# [m] camera position and look-at for a new page: from beyond the glass, looking back at the robot (the look-at
+# lies beside the cell so that the cell shows left of the control panel)
+INITIAL_CAMERA = ((0.45, 1.5, 1.0), (-0.3, 0.4, 0.28))
 SHOW_ABOVE = 0.002  # [m] paths are drawn this far above the glass so that it does not hide them
 KEYS = {'arrowup': 'up', 'arrowdown': 'down', 'arrowleft': 'left', 'arrowright': 'right', 'C': 'c', 'N': 'n'}
 HELP = ('**Keys** (seed 1): Up/Down rotate the tool about X, Left/Right about Y, by the step; '
@@ -224,6 +226,7 @@ class Studio:
                 self.say(str(exc))
                 return
             self.mode = 'teach'
+            self._model_view.set_visible(True)
             self.reach_results = (self.reach_results + [None] * len(self.teach.waypoints))[:len(self.teach.waypoints)]
             self._reach_dirty = True
             self._refresh_teach()
@@ -333,10 +336,12 @@ class Studio:
         state = 'saved' if wp.saved else 'not saved: skipped by the plan (press C)'
         planned = self.teach.planned_indices()
         reach = '' if res is None else ('**reachable**' if res.reachable else f'**unreachable**: {res.reason}')
+        others = [f'{k + 1}' for k, r in enumerate(self.reach_results) if r is not None and not r.reachable]
+        red = f'  \nunreachable (red): {", ".join(others)}' if others else ''
         return (f'**Waypoint {sel + 1}** of {len(self.teach.waypoints)} ({state})  \n'
                 f'position [m] {np.round(wp.position, 4).tolist()}  \n'
                 f'orientation ZYX [deg] {np.round(zyx, 2).tolist()}, step {self.teach.step_deg:g} deg  \n'
-                f'{reach}  \nthe plan uses {len(planned)} of {len(self.teach.waypoints)} waypoints')
+                f'{reach}  \nthe plan uses {len(planned)} of {len(self.teach.waypoints)} waypoints{red}')
 
     def _check_all_reach(self) -> None:
         """IK of every waypoint, each from its predecessor's solution, for the red markers."""
@@ -399,6 +404,7 @@ class Studio:
                 self._images[name].visible = True
             self._plan_info.content = speed_summary(plan)
             self.mode = 'preview'
+            self._model_view.set_visible(True)
             self._model_view.show(joint_names(), self.timeline.q_at(0.0))
         self.say(f'planned: bead {plan.summary.bead_length:.3f} m, {plan.summary.total_duration:.2f} s')
         return plan
@@ -409,6 +415,7 @@ class Studio:
                 self.say('press Plan first')
                 return
             self.mode = 'preview'
+            self._model_view.set_visible(True)
             self.clock = self.clock.play() if what == 'play' else self.clock.pause()
 
     def _on_scrub(self, event) -> None:
@@ -458,6 +465,8 @@ class Studio:
             self.run_progress = (None, 0.0, 0.0)
             self._run_info.content = 'connecting ...'
             self._reset_trail()
+            self.mode = 'run'
+            self._model_view.set_visible(False)  # the live robot is the one to watch
         self.live.start_run(job, self._namespace or job.namespace, self._controller or job.controller_name,
                             log=self._run_log, on_progress=self._on_run_progress, on_done=self._on_run_done)
         self.say('run started')
@@ -519,9 +528,12 @@ class Studio:
         if len(self._trail) < 2 or len(self._trail) == self._trail_drawn:
             return
         start = max(self._trail_drawn - 1, 0)
-        segs = sv.polyline_segments(np.array(self._trail[start:]))
+        points = np.array(self._trail[start:])
+        if self.sjob is not None:  # drawn above the glass, where the bead line is, not hidden in it
+            points = points + 1.5 * SHOW_ABOVE * self.glass.project(points)[2]
+        segs = sv.polyline_segments(points)
         self._trail_pieces.append(self.server.scene.add_line_segments(
-            f'/executed/piece_{len(self._trail_pieces)}', segs, (230, 30, 30), thickness=0.003))
+            f'/executed/piece_{len(self._trail_pieces)}', segs, (230, 30, 30), thickness=0.004))
         self._trail_drawn = len(self._trail)
 
     def _update_run_gui(self) -> None:

@@ -19,13 +19,14 @@ from ur_glue_planner.errors import JobError
 from ur_glue_planner.studio.job_file import read_job
 from ur_glue_planner.studio.ros_link import LiveRobot
 
+ROS_PARAMETERS = {'use_sim_time', 'start_type_description_service'}  # every rclpy node has these
 DEFAULTS = {'job': '', 'host': '127.0.0.1', 'port': 8080, 'namespace': '', 'controller_name': '',
             'save_path': 'out/studio/glue_job.yaml'}
 
 
 def parse_params(raw: dict) -> dict:
     """The studio's parameters with defaults; raises ValueError naming a bad one."""
-    unknown = sorted(set(raw) - set(DEFAULTS) - {'use_sim_time'})
+    unknown = sorted(set(raw) - set(DEFAULTS) - ROS_PARAMETERS)
     if unknown:
         raise ValueError(f"parameter {unknown[0]!r} is unknown; known: {', '.join(DEFAULTS)}")
     params = {**DEFAULTS, **raw}
