@@ -196,6 +196,12 @@ def test_save_writes_the_taught_job(studio, page):
     assert raw['path']['orientation_zyx'][row][2] == pytest.approx(-np.pi / 3 + np.radians(7.5), abs=1e-12)
     wait_until(lambda: page.get_by_text('saved 22 waypoints').count() > 0, 'the page to confirm the save')
     screenshot(page, '3_save')
+    # Load it back through the page: the saved waypoints, all saved.
+    page.locator('input:visible').nth(1).fill(str(path))  # the File tab's fields: Save as, Load (no labels)
+    page.get_by_role('button', name='Load', exact=True).click()
+    wait_until(lambda: studio.sjob.path == Path(path), 'the file to load')
+    assert np.array_equal(studio.teach.planned_arrays()[0], positions)
+    assert np.array_equal(studio.teach.planned_arrays()[1], zyx) and not studio.teach.skipped_indices()
 
 
 def test_plan_shows_the_figures_and_plays(studio, page):

@@ -178,6 +178,9 @@ class Studio:
             self.glass = windshield_model(job.windshield)
             self.kin = ur_kinematics(job.ur_type, job.tool)
             self.reach = Reach(self.kin, GlassCollision(job.ur_type, job.tool, glass_pieces(job.windshield)))
+            # The page loop checks every waypoint with its own Pinocchio and MuJoCo workspaces (not thread-safe).
+            self._reach_all = Reach(ur_kinematics(job.ur_type, job.tool),
+                                    GlassCollision(job.ur_type, job.tool, glass_pieces(job.windshield)))
             urdf = build_urdf(load_ur_params(job.ur_type), tool=get_tool(job.tool))
             if self._model_view is not None:
                 self._model_view.remove()
@@ -350,11 +353,11 @@ class Studio:
                 return
             self._reach_dirty = False
             teach, q = self.teach, self._q_ref
-            job = self.sjob.job
+            job, reach = self.sjob.job, self._reach_all
         results = []
         for wp in teach.waypoints:
             _, _, normal = self.glass.project(np.array(wp.position)[None])
-            res = self.reach.solve(waypoint_pose(wp.position, wp.rotation(), normal[0], job.standoff), q)
+            res = reach.solve(waypoint_pose(wp.position, wp.rotation(), normal[0], job.standoff), q)
             results.append(res)
             q = res.q if res.reachable else q
         with self._lock:
