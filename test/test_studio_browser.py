@@ -66,8 +66,8 @@ def browser():
     pw.stop()
 
 
-def _open(browser, studio: Studio):
-    page = browser.new_page(viewport=VIEWPORT)
+def _open(browser, studio: Studio, viewport: dict = VIEWPORT):
+    page = browser.new_page(viewport=viewport)
     # Arrival times of the page's websocket messages (viser's socket lives in a web worker, which the DevTools
     # network domain of the page does not see; Playwright reports its frames as the test pumps events).
     page.ws_frames = []
@@ -259,7 +259,8 @@ def test_without_a_job_the_studio_is_a_live_viewer_at_30_fps(browser):
     live = LiveRobot('/live')
     viewer = Studio(None, port=_free_port(), live=live)
     try:
-        page, client = _open(browser, viewer)
+        # A small page: software rendering of a large one would take the CPU this measurement is about.
+        page, client = _open(browser, viewer, viewport={'width': 640, 'height': 400})
         wait_until(lambda: viewer._live_view is not None and viewer.live_updates > 10, 'the live robot')
         assert viewer.sjob is None
         set_camera(client, (1.2, -1.0, 1.0), (0.0, 0.3, 0.4))
