@@ -2,6 +2,7 @@
 from __future__ import annotations
 
 import shutil
+import socket
 import time
 from pathlib import Path
 
@@ -101,3 +102,34 @@ def dismiss_toasts(page, timeout: float = 15.0) -> None:
         return
     notice.locator('button').first.click()
     notice.wait_for(state='hidden', timeout=timeout * 1e3)
+
+
+def free_port() -> int:
+    with socket.socket() as s:
+        s.bind(('127.0.0.1', 0))
+        return s.getsockname()[1]
+
+
+def open_page(browser, studio, viewport: dict = VIEWPORT):
+    page = browser.new_page(viewport=viewport)
+    # Arrival times of the page's websocket messages (viser's socket lives in a web worker, which the DevTools
+    # network domain of the page does not see; Playwright reports its frames as the test pumps events).
+    page.ws_frames = []
+    page.on('websocket', lambda ws: ws.on('framereceived', lambda _: page.ws_frames.append(time.monotonic())))
+    before = set(studio.server.get_clients())
+    page.goto(f'http://127.0.0.1:{studio.server.get_port()}')
+    new = wait_until(lambda: sorted(set(studio.server.get_clients()) - before), 'the page to connect')  # ids from 0
+    client = studio.server.get_clients()[new[0]]
+    wait_until(lambda: page.get_by_text('Connected').count() > 0 or page.locator('canvas').count() > 0,
+               'the page to draw')
+    dismiss_toasts(page)
+    return page, client
+
+
+def pump_until(page, condition, what: str, timeout: float) -> None:
+    """Wait with the browser's event loop turning, so that websocket events are timed as they arrive."""
+    deadline = time.monotonic() + timeout
+    while not condition():
+        if time.monotonic() > deadline:
+            raise TimeoutError(f'timed out after {timeout:.0f} s waiting for {what}')
+        page.wait_for_timeout(50)
