@@ -270,20 +270,28 @@ class Studio:
                 self._edit(lambda s: s.reorder(sel, target))
 
     def _on_gizmo(self, event) -> None:
-        if event.client is None or self.teach.selected is None:
+        # Applied at release: re-posing the gizmo from here while the user drags it would fight the drag.
+        if event.client is None or event.phase != 'end' or self.teach.selected is None:
             return
-        sel = self.teach.selected
-        target = event.target
-        rotation = sv.rotation_of(target.wxyz)
-        on_glass = onto_surface(self.glass, target.position)
+        self.gizmo_released(self.teach.selected, np.asarray(event.target.position), np.asarray(event.target.wxyz))
+
+    def gizmo_released(self, index: int, position: np.ndarray, wxyz: np.ndarray) -> bool:
+        """The gizmo of waypoint ``index`` was let go at ``position`` [m] with orientation ``wxyz``: the waypoint
+        moves to the nearest glass point (refused off the glass) and takes the new orientation if it turned."""
+        rotation = sv.rotation_of(wxyz)
+        on_glass = onto_surface(self.glass, position)
         if on_glass is None:
-            if event.phase == 'end':
-                self.say('a waypoint must stay on the glass')
-                self._refresh_teach()
-            return
-        self._edit(lambda s: s.set_rotation(sel, rotation).move(sel, on_glass.position)
-                   if not np.allclose(rotation, s.waypoints[sel].rotation(), atol=1e-9)
-                   else s.move(sel, on_glass.position))
+            self.say('a waypoint must stay on the glass')
+            self._refresh_teach()
+            return False
+
+        def change(s: TeachState) -> TeachState:
+            turned = not np.allclose(rotation, s.waypoints[index].rotation(), atol=1e-9)
+            moved = s.move(index, on_glass.position)
+            return moved.set_rotation(index, rotation) if turned else moved
+
+        self._edit(change)
+        return True
 
     def _refresh_teach(self) -> None:
         """Markers, labels, the gizmo, the selected waypoint's text and the model robot at its IK."""
