@@ -296,13 +296,15 @@ class Studio:
     def _refresh_teach(self) -> None:
         """Markers, labels, the gizmo, the selected waypoint's text and the model robot at its IK."""
         with self._lock:
+            res = self._solve_selected() if self.teach.current() is not None else None  # before colouring
             for handle in self._markers:
                 handle.remove()
             self._markers = []
             skipped = set(self.teach.skipped_indices())
             for k, wp in enumerate(self.teach.waypoints):
-                res = self.reach_results[k] if k < len(self.reach_results) else None
-                color = sv.GREY if k in skipped else sv.RED if res is not None and not res.reachable else sv.GREEN
+                known = self.reach_results[k] if k < len(self.reach_results) else None
+                unreachable = known is not None and not known.reachable
+                color = sv.RED if unreachable else sv.GREY if k in skipped else sv.GREEN
                 selected = k == self.teach.selected
                 marker = self.server.scene.add_icosphere(
                     f'/waypoints/wp_{k}', radius=sv.MARKER_RADIUS * (1.6 if selected else 1.0),
@@ -326,7 +328,6 @@ class Studio:
             self._gizmo.wxyz = sv.wxyz(cur.rotation())
             self._wp_select.max = max(1, len(self.teach.waypoints))
             self._wp_select.value = self.teach.selected + 1
-            res = self._solve_selected()
             self._wp_info.content = self._describe_selected(res)
             if self.mode == 'teach' and res is not None:
                 self._model_view.show(joint_names(), res.q)
