@@ -41,3 +41,15 @@ def test_our_urdfs_use_the_simulator_shapes_and_others_their_own():
     assert np.isclose(shapes[1].mesh.extents.max(), 0.4, atol=1e-9)
     robot = RobotModel(other)
     assert np.allclose(robot.link_poses(['j1'], [np.pi / 2])['l1'][:3, 3], [0.0, 0.0, 0.3])
+
+
+def test_seed_2_robot_mounted_1_m_up_is_drawn_there():
+    base = np.eye(4)
+    base[2, 3] = 1.0
+    urdf = build_urdf(load_ur_params('ur10'), base_pose=base)  # as ur_sim publishes it for config/seed_ur10.yaml
+    robot = RobotModel(urdf)
+    assert {s.link for s in robot.shapes} >= {'shoulder_link', 'wrist_3_link'}
+    poses = robot.link_poses(joint_names(), np.zeros(6))
+    assert poses['base_link_inertia'][2, 3] == 1.0
+    kin = ur_kinematics('ur10', None, frame='wrist_3_link', base_pose=base)
+    assert np.allclose(poses['wrist_3_link'], kin.fk(np.zeros(6)), atol=1e-12)
