@@ -18,7 +18,6 @@ import numpy as np
 import rclpy
 from builtin_interfaces.msg import Duration
 from control_msgs.action import FollowJointTrajectory
-from rclpy.action import ActionClient
 from rclpy.context import Context
 from rclpy.executors import SingleThreadedExecutor
 from rclpy.node import Node
@@ -27,6 +26,7 @@ from rosgraph_msgs.msg import Clock
 from sensor_msgs.msg import JointState
 from trajectory_msgs.msg import JointTrajectoryPoint
 
+from ur_glue_planner.execution.action_client import ActionClient
 from ur_sim_driver.jtc import TrajectoryController
 from ur_sim_driver.sim_config import sim_config_from_params
 from ur_sim_driver.simulator import Simulator
@@ -183,7 +183,7 @@ def tracking_error(ur_type: str = 'ur5e') -> dict:
     sim = Simulator(cfg)
     tol = default_tolerances(cfg.joints, trajectory=0.2, goal=0.1, stopped_velocity=0.2, goal_time=0.0)
     state = sim.state()
-    jtc = TrajectoryController(cfg.joints, tol, state.q)
+    jtc = TrajectoryController(cfg.joints, tol, state.q, sim.params.v_max, sim.a_max)
     cmd = TrajectoryCommand.from_arrays(JOINTS, **STANDARD)
     jtc.start(map_to_config_order(cmd, cfg.joints, state.q), state.t, state.q, state.qd, token='bench')
     worst = np.zeros(6)
@@ -192,7 +192,7 @@ def tracking_error(ur_type: str = 'ur5e') -> dict:
         state = sim.state()
         ref, _ = jtc.update(state.t, sim.control_dt, state.q, state.qd)
         worst = np.maximum(worst, np.abs(ref.positions - state.q))
-        sim.advance(state, ref)
+        sim.advance(state, ref, jtc.stop)
     return {'ur_type': ur_type, 'control_rate_hz': sim.control_rate, 'max_error_mrad': float(worst.max() * 1e3),
             'per_joint_mrad': (worst * 1e3).round(4).tolist()}
 

@@ -1,5 +1,5 @@
 # Source this file: `source scripts/env.bash`.
-# Gives a shell with the project's .venv, the colcon install/ (control_msgs if we built it, and this
+# Gives a shell with the project's .venv, the colcon install/ (the interface packages we built, and this
 # package), the ament prefixes that `ros2 run` and rosidl need, and both executables on PATH.
 _ur_root="$(cd "$(dirname "${BASH_SOURCE[0]}")/.." && pwd)"
 _ur_venv="$_ur_root/.venv"

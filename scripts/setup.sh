@@ -1,7 +1,8 @@
 #!/usr/bin/env bash
 # Idempotent project setup (`make setup`):
 #   1. .venv/ with the pinned wheels (ROS 2 Jazzy from PyPI, MuJoCo, Pinocchio, Ruckig, ...);
-#   2. interfaces/control_msgs built with colcon into install/, only if no control_msgs is importable;
+#   2. the interface packages under interfaces/ built with colcon into install/, each only where
+#      no package of that name is importable;
 #   3. this ament_python package built with colcon (--symlink-install) into install/, so that
 #      install/ur_sim_driver/lib/ur_sim_driver/<exe> and the ament index entry exist for `ros2 run`;
 #   4. Debian's headless-capable chromium for the studio's browser tests, if missing (apt-get, as root).
@@ -78,7 +79,6 @@ if [ ! -f "$STAMPS/wheels-$req_hash" ]; then
   # point them at this interpreter so that interface packages can be built against the venv.
   py_inc="$("$VPY" -c 'import sysconfig; print(sysconfig.get_paths()["include"])')"
   np_inc="$("$VPY" -c 'import numpy; print(numpy.get_include())')"
-  # (re-installing into an already patched venv leaves grep nothing to find: not an error under pipefail)
   { grep -rlE --include='*.cmake' '/opt/python/cp3[0-9]+-cp3[0-9]+' "$VENV/share" 2>/dev/null || true; } | while read -r f; do
     sed -i -E "s#/opt/python/cp3[0-9]+-cp3[0-9]+/include/python3\.[0-9]+#${py_inc}#g; s#/opt/python/cp3[0-9]+-cp3[0-9]+/lib/python3\.[0-9]+/site-packages/numpy/_core/include#${np_inc}#g" "$f"
   done
@@ -90,22 +90,46 @@ fi
 # shellcheck source=env.bash
 source "$ROOT/scripts/env.bash"
 
-# --- 2. control_msgs ---------------------------------------------------------------------------
-idl_hash="$(hash_of interfaces/control_msgs/*/* interfaces/control_msgs/CMakeLists.txt interfaces/control_msgs/package.xml)"
-if [ -f "$ROOT/install/control_msgs/share/control_msgs/package.xml" ] && [ ! -f "$STAMPS/control_msgs-$idl_hash" ]; then
-  log "interfaces/control_msgs changed: rebuilding"
-  rm -rf "$ROOT/build/control_msgs" "$ROOT/install/control_msgs"
-fi
-if ! python -c 'import control_msgs.action, control_msgs.msg' >/dev/null 2>&1; then
+# --- 2. interface packages --------------------------------------------------------------------
+# Every package under interfaces/ (control_msgs, ur_msgs, ur_dashboard_msgs, controller_manager_msgs,
+# tf2_msgs) is built from our IDL only where no package of that name is importable (e.g. from a ROS 2
+# install). One colcon call builds all missing ones; a stamp per package triggers a rebuild when its IDL
+# changes.
+iface_pkgs=()
+for d in "$ROOT"/interfaces/*/; do
+  [ -f "$d/package.xml" ] && iface_pkgs+=("$(basename "$d")")
+done
+for pkg in "${iface_pkgs[@]}"; do
+  h="$(hash_of "interfaces/$pkg"/*/* "interfaces/$pkg/CMakeLists.txt" "interfaces/$pkg/package.xml")"
+  if [ -f "$ROOT/install/$pkg/share/$pkg/package.xml" ] && [ ! -f "$STAMPS/iface-$pkg-$h" ]; then
+    log "interfaces/$pkg changed: rebuilding"
+    rm -rf "$ROOT/build/$pkg" "$ROOT/install/$pkg"
+  fi
+done
+# shellcheck disable=SC2207
+missing=($(python - "${iface_pkgs[@]}" <<'PYEOF'
+import importlib
+import sys
+for name in sys.argv[1:]:
+    try:
+        importlib.import_module(name + '.msg')
+    except ImportError:
+        print(name)
+PYEOF
+))
+if [ ${#missing[@]} -gt 0 ]; then
   ensure_build_tools "$VPY"
   mkdir -p "$ROOT/log"
-  log "no control_msgs importable: building interfaces/control_msgs with colcon (about 20 s)"
+  log "not importable: ${missing[*]}; building them from interfaces/ with colcon (a few minutes)"
   colcon --log-base "$ROOT/log" build --base-paths "$ROOT/interfaces" --build-base "$ROOT/build" \
-    --install-base "$ROOT/install" --packages-select control_msgs \
+    --install-base "$ROOT/install" --packages-select "${missing[@]}" \
     --cmake-args -DBUILD_TESTING=OFF -DPython3_EXECUTABLE="$VPY" --event-handlers console_cohesion- \
-    > "$ROOT/log/control_msgs_build.txt" 2>&1 || { tail -40 "$ROOT/log/control_msgs_build.txt"; exit 1; }
-  rm -f "$STAMPS"/control_msgs-*
-  touch "$STAMPS/control_msgs-$idl_hash"
+    > "$ROOT/log/interfaces_build.txt" 2>&1 || { tail -40 "$ROOT/log/interfaces_build.txt"; exit 1; }
+  for pkg in "${missing[@]}"; do
+    h="$(hash_of "interfaces/$pkg"/*/* "interfaces/$pkg/CMakeLists.txt" "interfaces/$pkg/package.xml")"
+    rm -f "$STAMPS/iface-$pkg-"*
+    touch "$STAMPS/iface-$pkg-$h"
+  done
   source "$ROOT/scripts/env.bash"
 fi
 
@@ -125,6 +149,6 @@ fi
 # --- 4. browser for the studio's tests ------------------------------------------------------------
 ensure_chromium
 
-python -c 'import rclpy, control_msgs.action, ur_sim_driver, ur_glue_planner' \
+python -c 'import rclpy, control_msgs.action, ur_msgs.srv, ur_dashboard_msgs.srv, controller_manager_msgs.srv, tf2_msgs.msg, ur_sim_driver, ur_glue_planner' \
   || { echo "error: the environment does not import; see log/" >&2; exit 1; }
 log "ready: source scripts/env.bash"

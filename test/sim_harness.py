@@ -12,15 +12,17 @@ import rclpy
 from builtin_interfaces.msg import Duration
 from control_msgs.action import FollowJointTrajectory
 from control_msgs.msg import JointTolerance, SpeedScalingFactor
-from rclpy.action import ActionClient
+from rclpy.callback_groups import ReentrantCallbackGroup
 from rclpy.executors import MultiThreadedExecutor, SingleThreadedExecutor
 from rclpy.node import Node
 from rclpy.parameter import Parameter
-from rclpy.qos import QoSProfile
+from rclpy.qos import DurabilityPolicy, QoSProfile
 from ros_helpers import ros_context
 from sensor_msgs.msg import JointState
+from std_msgs.msg import Float64
 from trajectory_msgs.msg import JointTrajectory, JointTrajectoryPoint
 
+from ur_glue_planner.execution.action_client import ActionClient
 from ur_sim_driver.node import UrSimNode
 
 TIMEOUT = 30.0  # [s] wall-clock deadline of any single wait
@@ -60,6 +62,8 @@ class Recording:
     t: list = field(default_factory=list)
     q: list = field(default_factory=list)
     qd: list = field(default_factory=list)
+    effort: list = field(default_factory=list)
+    speed_scaling: list = field(default_factory=list)  # [%] from the speed scaling state broadcaster
 
     def arrays(self):
         return np.array(self.t), np.array(self.q), np.array(self.qd)
@@ -75,12 +79,16 @@ class SimHarness:
         p = sim.cfg.prefixed
         ctrl = sim.cfg.controller_name
         self.joints = list(sim.sim.joint_names)
-        self.action = ActionClient(client, FollowJointTrajectory, p(f'{ctrl}/follow_joint_trajectory'))
+        # Its own group: a busy subscription of the client node must never hold up goal responses.
+        self.action = ActionClient(client, FollowJointTrajectory, p(f'{ctrl}/follow_joint_trajectory'),
+                                   callback_group=ReentrantCallbackGroup())
         self.topic = client.create_publisher(JointTrajectory, p(f'{ctrl}/joint_trajectory'), 10)
         self.scaling = client.create_publisher(SpeedScalingFactor, p(f'{ctrl}/speed_scaling_input'), 10)
         self.recording: Recording | None = None
         self._js_topic = p('joint_states')
+        self._scaling_topic = p('speed_scaling_state_broadcaster/speed_scaling')
         self._recorder: Node | None = None
+        self._listeners: list = []
         wait_for(lambda: self.action.server_is_ready(), what='the FollowJointTrajectory server')
         wait_for(lambda: self.topic.get_subscription_count() > 0, what='the joint_trajectory subscriber')
 
@@ -90,6 +98,12 @@ class SimHarness:
             rec.t.append(msg.header.stamp.sec + msg.header.stamp.nanosec * 1e-9)
             rec.q.append(list(msg.position))
             rec.qd.append(list(msg.velocity))
+            rec.effort.append(list(msg.effort))
+
+    def _on_scaling(self, msg: Float64) -> None:
+        rec = self.recording
+        if rec is not None:
+            rec.speed_scaling.append(msg.data)
 
     def record(self) -> Recording:
         """Start recording /joint_states (a subscription exists only while recording: in fast mode it is costly)."""
@@ -99,6 +113,7 @@ class SimHarness:
             # destroyed (destroying entities under a spinning executor races in rclpy).
             node = Node('test_recorder', context=self.client.context)
             node.create_subscription(JointState, self._js_topic, self._on_js, QoSProfile(depth=1000))
+            node.create_subscription(Float64, self._scaling_topic, self._on_scaling, QoSProfile(depth=1000))
             executor = SingleThreadedExecutor(context=self.client.context)
             executor.add_node(node)
             thread = threading.Thread(target=executor.spin, daemon=True)
@@ -107,6 +122,29 @@ class SimHarness:
             wait_for(lambda: self.recording.t, what='the first recorded joint state')
             self.recording = Recording()
         return self.recording
+
+    def listen(self, msg_type, topic: str, callback, depth: int = 1000, latched: bool = False) -> None:
+        """Subscribe `callback` on a node with its own executor and thread for the harness's lifetime.
+
+        `latched`: transient local, so that what was published before the subscription matched arrives too.
+        """
+        node = Node(f'test_listener_{len(self._listeners)}', context=self.client.context)
+        durability = DurabilityPolicy.TRANSIENT_LOCAL if latched else DurabilityPolicy.VOLATILE
+        node.create_subscription(msg_type, topic, callback, QoSProfile(depth=depth, durability=durability))
+        executor = SingleThreadedExecutor(context=self.client.context)
+        executor.add_node(node)
+        thread = threading.Thread(target=executor.spin, daemon=True)
+        thread.start()
+        self._listeners.append((node, executor, thread))
+
+    def close(self) -> None:
+        """Stop recording and listening."""
+        self.stop_recording()
+        for node, executor, thread in self._listeners:
+            executor.shutdown(timeout_sec=2.0)
+            thread.join(timeout=5.0)
+            node.destroy_node()
+        self._listeners.clear()
 
     def stop_recording(self) -> Recording:
         """Stop recording and return what was recorded."""
@@ -172,7 +210,7 @@ def running_sim(**params) -> Iterator[SimHarness]:
             yield harness
         finally:
             if harness is not None:
-                harness.stop_recording()
+                harness.close()
             sim.shutdown()
             executor.shutdown(timeout_sec=2.0)
             thread.join(timeout=5.0)

@@ -4,13 +4,17 @@ One instance owns the active trajectory and decides, every control cycle, the re
 controller tracks and whether the active goal has ended. It reproduces ros2_controllers'
 joint_trajectory_controller as the UR driver configures it (``scaled_joint_trajectory_controller``):
 
-* trajectory time advances by ``period x speed scaling factor``; a factor of 0 pauses;
+* trajectory time advances by ``period x speed_scaling_input x the robot's own factor``
+  (``speed_scaling.py``: the emulated robot slows itself where it cannot follow); an input of 0 pauses;
+* the reference it returns is in real time: velocities and accelerations are multiplied by that factor
+  (and its square), so the robot's servo and torque controller see the motion actually asked of them;
 * a new trajectory replaces the active one; an action goal that is replaced ends with INVALID_GOAL
   "Current goal preempted by new incoming action." (upstream); replaced by a topic message it ends the
   same way with its own message (upstream leaves such a goal running against the topic's trajectory,
   which then reports on a motion it did not ask for; we end it instead, as a user expects);
-* while running, the path tolerance is checked for action goals; a violation aborts with
-  PATH_TOLERANCE_VIOLATED and holds the measured position;
+* while running, and on the first sample even when that is already the last point (upstream: "in case
+  the first sample is the last point"), the path tolerance is checked for action goals; a violation
+  aborts with PATH_TOLERANCE_VIOLATED and holds the measured position;
 * after the last point, the goal tolerance (position, and velocity against
   ``stopped_velocity_tolerance``) decides SUCCESSFUL, or GOAL_TOLERANCE_VIOLATED once ``goal_time`` has
   passed (0 = wait without limit, as upstream); after success the last point is held;
@@ -24,6 +28,7 @@ from dataclasses import dataclass
 import numpy as np
 
 from ur_sim_driver import result_codes
+from ur_sim_driver.speed_scaling import RobotSpeedScaling
 from ur_sim_driver.tolerances import check_goal, check_path, goal_outcome
 from ur_sim_driver.trajectory import Trajectory, TrajectorySample
 from ur_sim_driver.trajectory_types import SegmentTolerances, TrajectoryPoints
@@ -54,14 +59,25 @@ class TrajectoryController:
         joint_names: n controller joint names.
         defaults: default tolerances (from the ``constraints`` parameters).
         hold_positions: (n,) [rad] position held before any trajectory.
-        speed_scaling: initial factor in [0, 1].
+        v_max, a_max: (n,) joint velocity [rad/s] and acceleration [rad/s^2] limits of the robot.
+        speed_scaling: initial speed_scaling_input factor in [0, 1].
+
+    Attributes:
+        speed_scaling: the speed_scaling_input factor in [0, 1] (set by the node).
+        scaling: the robot's own speed scaling, updated every cycle.
+        stop: (n,) [rad] position the robot must not pass this cycle (the final point while the last
+            segment runs, or the hold position), or None.
     """
 
     def __init__(self, joint_names: tuple[str, ...], defaults: SegmentTolerances,
-                 hold_positions: np.ndarray, speed_scaling: float = 1.0) -> None:
+                 hold_positions: np.ndarray, v_max: np.ndarray, a_max: np.ndarray,
+                 speed_scaling: float = 1.0) -> None:
         self.joint_names = tuple(joint_names)
         self.defaults = defaults
         self.speed_scaling = float(speed_scaling)
+        self.scaling = RobotSpeedScaling(v_max, a_max, speed_scaling)
+        self.stop: np.ndarray | None = np.array(hold_positions, dtype=float)
+        self._first_sample = False
         self._hold = np.array(hold_positions, dtype=float)
         self._trajectory: Trajectory | None = None
         self._tolerances: SegmentTolerances | None = None
@@ -106,6 +122,7 @@ class TrajectoryController:
         self._trajectory = Trajectory.start(points, now, q, qd)
         self._tolerances = tolerances if tolerances is not None else self.defaults
         self._token = token
+        self._first_sample = True
         return preempted
 
     def cancel(self, token: Hashable, q: np.ndarray) -> bool:
@@ -137,15 +154,26 @@ class TrajectoryController:
         outcome = None
         traj = self._trajectory
         if traj is None:
-            sample = self._hold_sample()
+            raw = self._hold_sample()
+            self.scaling.update(raw.velocities, np.zeros_like(q), self.speed_scaling, period)
+            self.stop = self._hold
+            sample = raw
         else:
             # Sample at the current trajectory time, then advance it (as upstream): the reference for this
             # cycle is the trajectory at `now`, which the joint controller tracks at this instant.
             t_sample = self._traj_time
-            sample = traj.sample(t_sample)
-            self._traj_time += period * self.speed_scaling
+            raw = traj.sample(t_sample)
+            last = len(traj.points.times) - 1
+            self.stop = traj.points.positions[last] if raw.ended or raw.segment_index == last else None
+            # The factor read this cycle is the robot's from the previous one (the driver reads it with the
+            # state); what the robot makes of this cycle's reference shows from the next cycle on.
+            total = self.scaling.total
+            self.scaling.update(raw.velocities, raw.positions - q, self.speed_scaling, period)
+            sample = raw._replace(velocities=raw.velocities * total, accelerations=raw.accelerations * total**2)
+            self._traj_time += period * total
             if self._token is not None:
                 outcome = self._supervise(sample, t_sample - traj.end_time, q, qd)
+            self._first_sample = False
             if outcome is None and sample.ended and self._token is None:
                 # Topic trajectories (and finished goals) end by holding their last point.
                 self.hold(sample.positions)
@@ -158,12 +186,13 @@ class TrajectoryController:
         err_q = sample.positions - q
         err_qd = sample.velocities - qd
         token = self._token
-        if not sample.ended:
+        if not sample.ended or self._first_sample:
             reason = check_path(err_q, err_qd, None, tol, self.joint_names)
-            if reason is None:
+            if reason is not None:
+                self.hold(q)
+                return Outcome(token, result_codes.PATH_TOLERANCE_VIOLATED, reason)
+            if not sample.ended:
                 return None
-            self.hold(q)
-            return Outcome(token, result_codes.PATH_TOLERANCE_VIOLATED, reason)
         # Past the end the goal state is the last point at rest: velocity is judged against 0.
         reason = check_goal(err_q, -qd, None, tol, self.joint_names)
         code = goal_outcome(time_since_end, reason, tol.goal_time)

@@ -1,9 +1,11 @@
 """The `ur_sim` node: a MuJoCo-simulated UR arm behind the UR ROS 2 driver's interfaces.
 
 Threads: the simulation loop runs in its own thread (paced to the wall clock, or as fast as possible) and
-publishes every control cycle; ROS callbacks (goals, cancels, topic commands, speed scaling) run in the
-executor and hand work to the loop under one lock. All times on the interfaces are simulated time, which
-the node publishes on /clock.
+publishes every control cycle. The trajectory controller's action server and joint_trajectory subscription
+run in a process of their own (``trajectory_gateway.py``, started here), so that receiving a large
+trajectory never holds up the loop; a receiving thread hands its trajectories and cancels to the loop under
+one lock, and the loop sends back outcomes and feedback. speed_scaling_input is served here. All times on the
+interfaces are simulated time, which the node publishes on /clock.
 """
 from __future__ import annotations
 
@@ -15,11 +17,9 @@ import time
 
 import numpy as np
 import rclpy
-from control_msgs.action import FollowJointTrajectory
 from control_msgs.msg import JointTrajectoryControllerState, SpeedScalingFactor
 from geometry_msgs.msg import PoseStamped
-from rclpy.action import ActionServer, CancelResponse, GoalResponse
-from rclpy.callback_groups import MutuallyExclusiveCallbackGroup, ReentrantCallbackGroup
+from rclpy.callback_groups import MutuallyExclusiveCallbackGroup
 from rclpy.executors import ExternalShutdownException, MultiThreadedExecutor
 from rclpy.node import Node
 from rclpy.qos import DurabilityPolicy, QoSProfile
@@ -27,32 +27,20 @@ from rclpy.signals import SignalHandlerOptions
 from rosgraph_msgs.msg import Clock
 from sensor_msgs.msg import JointState
 from std_msgs.msg import Float64, String
-from trajectory_msgs.msg import JointTrajectory
 
 from ur_sim_driver import conversions as conv
-from ur_sim_driver import result_codes
-from ur_sim_driver.errors import UrSimError
+from ur_sim_driver.errors import TrajectoryError, UrSimError
+from ur_sim_driver.gateway_link import Cancel, Canceled, Ended, Feedback, GatewayConfig, GatewayLink, Start
 from ur_sim_driver.jtc import Outcome, TrajectoryController
+from ur_sim_driver.memory import use_mmap_for_large_blocks
 from ur_sim_driver.sim_config import SimConfig, sim_config_from_params
 from ur_sim_driver.simulator import Simulator
-from ur_sim_driver.tolerances import default_tolerances, resolve_tolerances
-from ur_sim_driver.validation import map_to_config_order, validate_trajectory
+from ur_sim_driver.tolerances import default_tolerances
+from ur_sim_driver.validation import map_to_config_order
 
 GIL_SWITCH_INTERVAL = 2e-4  # [s]
 VIEWER_FRAME_PERIOD = 1.0 / 30.0  # [s] of wall time
 _CATCH_UP_LIMIT = 0.1  # [s] of wall time the real-time loop may fall behind before it stops catching up
-
-
-class _GoalWaiter:
-    """Hands an action goal's outcome from the simulation loop to the goal's execute thread."""
-
-    def __init__(self) -> None:
-        self.event = threading.Event()
-        self.outcome: Outcome | None = None
-
-    def finish(self, outcome: Outcome) -> None:
-        self.outcome = outcome
-        self.event.set()
 
 
 class UrSimNode(Node):
@@ -72,20 +60,20 @@ class UrSimNode(Node):
             {name: p.value for name, p in self._parameters.items() if name != 'use_sim_time'})
         self._warn_unknown_parameters()
         self.sim = Simulator(self.cfg)
-        n = len(self.cfg.joints)
+        use_mmap_for_large_blocks()  # long trajectories' arrays go back to the system when dropped
+        # The controller's joints carry the tf_prefix, as in the driver's ur_controllers.yaml.
+        self.joints = self.sim.joint_names
         self._defaults = default_tolerances(
-            self.cfg.joints, trajectory=[c.trajectory for c in self.cfg.constraints],
+            self.joints, trajectory=[c.trajectory for c in self.cfg.constraints],
             goal=[c.goal for c in self.cfg.constraints], stopped_velocity=self.cfg.stopped_velocity_tolerance,
             goal_time=self.cfg.goal_time)
-        self.jtc = TrajectoryController(self.cfg.joints, self._defaults, self.sim.state().q,
+        self.jtc = TrajectoryController(self.joints, self._defaults, self.sim.state().q,
+                                        self.sim.params.v_max, self.sim.a_max,
                                         self.cfg.speed_scaling_initial_factor)
         self._lock = threading.Lock()
-        self._waiters: dict[bytes, _GoalWaiter] = {}  # by goal id
-        self._goal_handles: dict[bytes, object] = {}
         self._stop = threading.Event()
         self._feedback_every = max(1, round(self.sim.control_rate / self.cfg.action_monitor_rate))
         self._cycle = 0
-        self._last_tau = np.zeros(n)
 
         p = self.cfg.prefixed
         ctrl = self.cfg.controller_name
@@ -98,15 +86,15 @@ class UrSimNode(Node):
         self._pub_description = self.create_publisher(String, p('robot_description'), latched)
         self._pub_description.publish(String(data=self.sim.urdf))
 
-        commands = MutuallyExclusiveCallbackGroup()
-        self.create_subscription(JointTrajectory, p(f'{ctrl}/joint_trajectory'), self._on_topic_trajectory, 10,
-                                 callback_group=commands)
         self.create_subscription(SpeedScalingFactor, p(f'{ctrl}/speed_scaling_input'), self._on_speed_scaling,
-                                 10, callback_group=commands)
-        self._action = ActionServer(
-            self, FollowJointTrajectory, p(f'{ctrl}/follow_joint_trajectory'),
-            execute_callback=self._execute, goal_callback=self._on_goal, cancel_callback=self._on_cancel,
-            callback_group=ReentrantCallbackGroup())
+                                 10, callback_group=MutuallyExclusiveCallbackGroup())
+        params = self.sim.params
+        self.gateway = GatewayLink(GatewayConfig(
+            node_name=ctrl, namespace=self.cfg.namespace, joints=self.joints, q_min=params.q_min,
+            q_max=params.q_max, v_max=params.v_max, strict_limits=self.cfg.strict_limit_checks,
+            allow_partial=self.cfg.allow_partial_joints_goal,
+            allow_nonzero_end_velocity=self.cfg.allow_nonzero_velocity_at_trajectory_end,
+            defaults=self._defaults), self._on_gateway)
 
         self._init_messages()
         self._thread = threading.Thread(target=self._run, name='ur_sim_loop', daemon=True)
@@ -136,36 +124,25 @@ class UrSimNode(Node):
         self._tcp_msg.header.frame_id = f'{self.cfg.tf_prefix}base'
 
     # ---- ROS callbacks (executor threads) ----------------------------------------------------------
-    def _validate(self, msg: JointTrajectory) -> str | None:
-        return validate_trajectory(
-            conv.trajectory_command(msg), joint_names_config=self.cfg.joints, q_min=self.sim.params.q_min,
-            q_max=self.sim.params.q_max, v_max=self.sim.params.v_max, now=self.sim.time,
-            allow_partial=self.cfg.allow_partial_joints_goal,
-            allow_nonzero_end_velocity=self.cfg.allow_nonzero_velocity_at_trajectory_end)
-
-    def _on_goal(self, goal: FollowJointTrajectory.Goal) -> GoalResponse:
-        reason = self._validate(goal.trajectory)
-        if reason is None and goal.multi_dof_trajectory.points:
-            reason = 'multi_dof_trajectory is not supported by this controller (it has no multi-DOF joints)'
-        if reason is not None:
-            self.get_logger().error(f'Rejected FollowJointTrajectory goal: {reason}')
-            return GoalResponse.REJECT
-        return GoalResponse.ACCEPT
-
-    def _on_cancel(self, goal_handle) -> CancelResponse:
-        return CancelResponse.ACCEPT
-
-    def _on_topic_trajectory(self, msg: JointTrajectory) -> None:
-        reason = self._validate(msg)
-        if reason is not None:
-            self.get_logger().error(f'Dropped JointTrajectory message: {reason}')
-            return
-        with self._lock:
-            state = self.sim.state()
-            points = map_to_config_order(conv.trajectory_command(msg), self.cfg.joints, self._hold_reference())
-            preempted = self.jtc.start(points, state.t, state.q, state.qd)
-        if preempted is not None:
-            self._finish(preempted)
+    def _on_gateway(self, message: object) -> None:
+        """A trajectory or cancel from the controller's interface process (receiving thread)."""
+        if isinstance(message, Start):
+            try:
+                # Mapping a long trajectory is done outside the lock the loop needs every cycle.
+                points = map_to_config_order(message.command, self.joints, self._hold_reference())
+            except TrajectoryError as exc:  # validated in the gateway: only a bug gets here
+                self.get_logger().error(f'trajectory not started: {exc}')
+                return
+            with self._lock:
+                state = self.sim.state()
+                preempted = self.jtc.start(points, state.t, state.q, state.qd, token=message.token,
+                                           tolerances=message.tolerances)
+            if preempted is not None:
+                self._finish(preempted)
+        elif isinstance(message, Cancel):
+            with self._lock:
+                ok = self.jtc.cancel(message.token, self.sim.state().q)
+            self.gateway.send(Canceled(message.token, ok))
 
     def _on_speed_scaling(self, msg: SpeedScalingFactor) -> None:
         f = msg.factor
@@ -181,52 +158,9 @@ class UrSimNode(Node):
         sample = self.jtc.last_sample
         return sample.positions.copy() if sample is not None else self.sim.state().q
 
-    def _execute(self, goal_handle) -> FollowJointTrajectory.Result:
-        goal = goal_handle.request
-        waiter = _GoalWaiter()
-        tolerances, reason = resolve_tolerances(
-            self._defaults, self.cfg.joints, conv.tolerance_specs(goal.path_tolerance),
-            conv.tolerance_specs(goal.goal_tolerance), conv.duration_to_sec(goal.goal_time_tolerance))
-        if reason is not None:
-            self.get_logger().error(f'Goal tolerances ignored, using the defaults: {reason}')
-        token = bytes(goal_handle.goal_id.uuid)
-        with self._lock:
-            state = self.sim.state()
-            points = map_to_config_order(conv.trajectory_command(goal.trajectory), self.cfg.joints,
-                                         self._hold_reference())
-            self._waiters[token] = waiter
-            self._goal_handles[token] = goal_handle
-            preempted = self.jtc.start(points, state.t, state.q, state.qd, token=token, tolerances=tolerances)
-        if preempted is not None:
-            self._finish(preempted)
-        while not waiter.event.wait(0.005):
-            if goal_handle.is_cancel_requested:
-                with self._lock:
-                    if self.jtc.cancel(token, self.sim.state().q):
-                        self._waiters.pop(token, None)
-                        self._goal_handles.pop(token, None)
-                        goal_handle.canceled()
-                        self.get_logger().info('Goal canceled; holding the measured position')
-                        return FollowJointTrajectory.Result(error_code=result_codes.SUCCESSFUL,
-                                                            error_string='Goal canceled by the client.')
-            if self._stop.is_set() or not self.context.ok():
-                goal_handle.abort()
-                return FollowJointTrajectory.Result(error_code=result_codes.INVALID_GOAL,
-                                                    error_string='ur_sim is shutting down.')
-        outcome = waiter.outcome
-        result = FollowJointTrajectory.Result(error_code=outcome.code, error_string=outcome.message)
-        if outcome.code == result_codes.SUCCESSFUL:
-            goal_handle.succeed()
-        else:
-            self.get_logger().warning(f'Goal aborted ({result_codes.NAMES[outcome.code]}): {outcome.message}')
-            goal_handle.abort()
-        return result
-
     def _finish(self, outcome: Outcome) -> None:
-        self._goal_handles.pop(outcome.token, None)
-        waiter = self._waiters.pop(outcome.token, None)
-        if waiter is not None:
-            waiter.finish(outcome)
+        if outcome.token is not None:
+            self.gateway.send(Ended(outcome.token, outcome.code, outcome.message))
 
     # ---- simulation loop (own thread) ------------------------------------------------------------
     def _open_viewer(self):
@@ -280,18 +214,19 @@ class UrSimNode(Node):
         with self._lock:
             state = self.sim.state()
             sample, outcome = self.jtc.update(state.t, self.sim.control_dt, state.q, state.qd)
-            tau = self.sim.advance(state, sample)
+            tau = self.sim.advance(state, sample, self.jtc.stop)
             token = self.jtc.active_token
             feedback_due = token is not None and self._cycle % self._feedback_every == 0
-            factor = self.jtc.speed_scaling
-        self._publish(state, sample, tau, factor)
+            robot_factor, total_factor = self.jtc.scaling.factor, self.jtc.scaling.total
+        self.gateway.set_sim_time(self.sim.time)
+        self._publish(state, sample, tau, robot_factor, total_factor)
         if feedback_due:
             self._publish_feedback(token, state, sample)
         if outcome is not None:
             self._finish(outcome)
         self._cycle += 1
 
-    def _publish(self, state, sample, tau, factor) -> None:
+    def _publish(self, state, sample, tau, robot_factor: float, total_factor: float) -> None:
         stamp = conv.sec_to_time(state.t)
         js = self._js
         js.header.stamp = stamp
@@ -305,9 +240,10 @@ class UrSimNode(Node):
         conv.fill_point(st.feedback, state.q, state.qd)
         conv.fill_point(st.error, sample.positions - state.q, sample.velocities - state.qd)
         conv.fill_point(st.output, sample.positions, sample.velocities, effort=tau)
-        st.speed_scaling_factor = factor
+        # The controller reports the factor it advances trajectory time by; the broadcaster the robot's own.
+        st.speed_scaling_factor = total_factor
         self._pub_state.publish(st)
-        self._scaling_msg.data = factor * 100.0
+        self._scaling_msg.data = robot_factor * 100.0
         self._pub_scaling.publish(self._scaling_msg)
         p, q = self.sim.tcp_pose()
         pose = self._tcp_msg
@@ -320,25 +256,15 @@ class UrSimNode(Node):
         self._pub_clock.publish(self._clock_msg)
 
     def _publish_feedback(self, token, state, sample) -> None:
-        goal_handle = self._goal_handles.get(token)
-        if goal_handle is None:
-            return
-        fb = FollowJointTrajectory.Feedback()
-        fb.header.stamp = conv.sec_to_time(state.t)
-        fb.joint_names = list(self.sim.joint_names)
-        fb.desired = conv.trajectory_point(sample.positions, sample.velocities, sample.accelerations)
-        fb.actual = conv.trajectory_point(state.q, state.qd)
-        fb.error = conv.trajectory_point(sample.positions - state.q, sample.velocities - state.qd)
-        try:
-            goal_handle.publish_feedback(fb)
-        except Exception as exc:  # the goal may have ended in an executor thread meanwhile
-            self.get_logger().debug(f'feedback not published: {exc!r}')
+        self.gateway.send(Feedback(token, state.t, (sample.positions, sample.velocities, sample.accelerations),
+                                   (state.q, state.qd), (sample.positions - state.q, sample.velocities - state.qd)))
 
     def shutdown(self) -> None:
-        """Stop the simulation loop and wait for it."""
+        """Stop the simulation loop and the controller's interface process, and wait for both."""
         self._stop.set()
         if self._thread.is_alive():
             self._thread.join(timeout=5.0)
+        self.gateway.close()
 
 
 def main(argv: list[str] | None = None) -> int:

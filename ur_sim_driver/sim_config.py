@@ -36,6 +36,7 @@ class SimConfig:
     action_monitor_rate: float = 20.0
     allow_partial_joints_goal: bool = False
     allow_nonzero_velocity_at_trajectory_end: bool = False
+    strict_limit_checks: bool = False
     update_rate: float = 0.0
     physics_substeps: int = 0
     speed_scaling_initial_factor: float = 1.0
@@ -95,10 +96,14 @@ def sim_config_from_params(params: Mapping[str, Any]) -> SimConfig:
         raise ConfigError(f"parameter 'physics_substeps' = {substeps!r} must be a whole number in [0, 100] "
                           '(0: automatic, physics step <= 2 ms)')
     constraints = []
+    prefix = str(get('tf_prefix', d.tf_prefix))
     for j in joints:
+        # Keys may name the joint with its tf_prefix (as ur_controllers.yaml does) or without.
+        key = f'constraints.{prefix}{j}' if f'constraints.{prefix}{j}.goal' in params or \
+            f'constraints.{prefix}{j}.trajectory' in params else f'constraints.{j}'
         constraints.append(JointConstraint(
-            trajectory=_number(f'constraints.{j}.trajectory', get(f'constraints.{j}.trajectory', 0.2), 0.0, 10.0),
-            goal=_number(f'constraints.{j}.goal', get(f'constraints.{j}.goal', 0.1), 0.0, 10.0),
+            trajectory=_number(f'{key}.trajectory', get(f'{key}.trajectory', 0.2), 0.0, 10.0),
+            goal=_number(f'{key}.goal', get(f'{key}.goal', 0.1), 0.0, 10.0),
         ))
     base_pose = tuple(float(x) for x in get('base_pose', d.base_pose))
     if len(base_pose) != 6 or not all(math.isfinite(x) for x in base_pose):
@@ -120,6 +125,7 @@ def sim_config_from_params(params: Mapping[str, Any]) -> SimConfig:
         allow_partial_joints_goal=bool(get('allow_partial_joints_goal', d.allow_partial_joints_goal)),
         allow_nonzero_velocity_at_trajectory_end=bool(
             get('allow_nonzero_velocity_at_trajectory_end', d.allow_nonzero_velocity_at_trajectory_end)),
+        strict_limit_checks=bool(get('strict_limit_checks', d.strict_limit_checks)),
         update_rate=update_rate,
         physics_substeps=substeps,
         speed_scaling_initial_factor=_number('speed_scaling_initial_factor',

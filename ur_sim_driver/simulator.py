@@ -13,11 +13,20 @@ from ur_sim_driver.description.urdf import build_urdf
 from ur_sim_driver.errors import ConfigError
 from ur_sim_driver.physics import ArmPhysics, ArmState
 from ur_sim_driver.scene import load_scene, pose_matrix
+from ur_sim_driver.servo import JointServo, ServoLimits, Setpoint
 from ur_sim_driver.sim_config import SimConfig
 from ur_sim_driver.torque_control import PdGains, computed_torque
 from ur_sim_driver.trajectory import TrajectorySample
 
 MAX_PHYSICS_STEP = 0.002  # [s] automatic substeps keep the physics step at or below this
+# Share of a joint's effort limit the servo plans accelerations with; the rest is margin for the feedback.
+EFFORT_SHARE = 0.9
+# The servo follows the reference with the type's acceleration limit (5 rad/s^2, MoveIt's conservative value;
+# UR publishes none) plus this slack, so that plans made exactly at the limit are passed through unchanged.
+ACCEL_SLACK = 1.05
+# To stop (at a final point, a hold position or a position limit) the arm brakes harder, up to this multiple
+# of that limit where its torques allow (more makes several joints braking at once saturate their torques).
+BRAKE_CAPABILITY = 2.0
 
 
 class Simulator:
@@ -53,6 +62,9 @@ class Simulator:
                               f'[{self.params.q_min[i]:.4f}, {self.params.q_max[i]:.4f}] of {self.joint_names[i]}')
         self.physics.reset(q0)
         self.gains = PdGains.critically_damped(len(q0), self.control_rate)
+        self.servo = JointServo(q0, self.control_rate)
+        self.a_max = np.full(len(q0), self.params.a_max)
+        self.last_setpoint: Setpoint | None = None
 
     @property
     def time(self) -> float:
@@ -63,13 +75,24 @@ class Simulator:
         """Measured joint state now."""
         return self.physics.state()
 
-    def advance(self, state: ArmState, ref: TrajectorySample) -> np.ndarray:
-        """Compute torques tracking `ref` from `state`, apply them for one control period; return them (n,) [N m]."""
-        # A cubic or quintic may overshoot its points slightly; never command past the joint limits.
-        q_ref = np.clip(ref.positions, self.params.q_min, self.params.q_max)
+    def advance(self, state: ArmState, ref: TrajectorySample, stop: np.ndarray | None = None) -> np.ndarray:
+        """Track `ref` from `state` for one control period; return the applied torques (n,) [N m].
+
+        The robot's servo turns the reference into a setpoint within the joint limits (``servo.py``), never
+        passing `stop` (n,) [rad]; the computed-torque controller tracks the setpoint.
+        """
+        p = self.params
         mass, bias = self.physics.dynamics()
-        tau, _ = computed_torque(mass, bias, state.q, state.qd, q_ref, ref.velocities, ref.accelerations,
-                                 self.gains, self.params.effort_max)
+        # What the joints can accelerate at now: the type's limit, or less where the effort limit (after
+        # gravity and Coriolis torques) allows less. The diagonal of M is the joint's own inertia.
+        reachable = (EFFORT_SHARE * p.effort_max - np.abs(bias)) / np.diag(mass)
+        reachable = np.maximum(reachable, 0.05 * self.a_max)
+        limits = ServoLimits(p.v_max, np.minimum(reachable, ACCEL_SLACK * self.a_max),
+                             np.minimum(reachable, BRAKE_CAPABILITY * self.a_max), p.q_min, p.q_max)
+        sp = self.servo.step(ref.positions, ref.velocities, ref.accelerations, self.control_dt, limits, stop)
+        self.last_setpoint = sp
+        tau, _ = computed_torque(mass, bias, state.q, state.qd, sp.positions, sp.velocities, sp.accelerations,
+                                 self.gains, p.effort_max, p.v_max, self.control_dt)
         self.physics.step(tau)
         return tau
 

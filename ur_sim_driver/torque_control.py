@@ -11,7 +11,11 @@ zero-order-hold loop stays well inside its stability region (Kd T = 0.6, Kp T^2 
 omega = 150 rad/s (Kp 22500, Kd 300); 125 Hz -> 37.5 rad/s (Kp 1406, Kd 75). Measured on the benchmark's
 6-joint trajectory, the tracking error stays below 0.05 mrad at 500 Hz and 0.4 mrad at 125 Hz
 (out/bench/sim.json); a fraction of 0.1 gave 0.07 and 1.0 mrad.
-Efforts are clipped to the type's limits before they reach the actuators.
+Efforts are clipped to the type's limits before they reach the actuators. The commanded acceleration never
+asks a joint to exceed its velocity limit within the next period, and the drive's torque in the direction of
+motion falls to zero as the joint reaches its velocity limit (a motor's torque-speed curve, from the back-EMF of
+its windings): no coupling torque from another joint can then push it faster, while braking torque stays at
+full strength. Whatever the reference, the measured joint speed stays at its limit.
 """
 from __future__ import annotations
 
@@ -21,6 +25,8 @@ import numpy as np
 
 # omega * control_period: see the module docstring.
 _OMEGA_TIMES_PERIOD = 0.3
+# Speed, as a share of the limit, above which the driving torque falls linearly to zero at the limit.
+SPEED_KNEE = 0.99
 
 
 @dataclass(frozen=True, eq=False)
@@ -52,6 +58,8 @@ def computed_torque(
     qdd_ref: np.ndarray,
     gains: PdGains,
     effort_max: np.ndarray,
+    v_max: np.ndarray | None = None,
+    dt: float = 0.0,
 ) -> tuple[np.ndarray, np.ndarray]:
     """Joint torques that make the arm follow the reference.
 
@@ -62,11 +70,29 @@ def computed_torque(
         q_ref, qd_ref, qdd_ref: (n,) reference [rad], [rad/s], [rad/s^2].
         gains: PD gains.
         effort_max: (n,) torque limits [N m].
+        v_max: (n,) velocity limits [rad/s]; with `dt` > 0 the acceleration is limited so that
+            |qd + accel dt| <= v_max.
+        dt: control period [s].
 
     Returns:
         (tau, saturated): tau (n,) clipped to +-effort_max [N m]; saturated (n,) bool where clipping acted.
     """
     accel = qdd_ref + gains.kp * (q_ref - q) + gains.kd * (qd_ref - qd)
+    if v_max is not None and dt > 0.0:
+        accel = np.clip(accel, (-v_max - qd) / dt, (v_max - qd) / dt)
     tau = mass_matrix @ accel + bias
-    clipped = np.clip(tau, -effort_max, effort_max)
+    lo, hi = -effort_max, effort_max
+    if v_max is not None:
+        lo, hi = drive_torque_limits(qd, v_max, effort_max)
+    clipped = np.clip(tau, lo, hi)
     return clipped, clipped != tau
+
+
+def drive_torque_limits(qd: np.ndarray, v_max: np.ndarray, effort_max: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
+    """Torque bounds (lo, hi) (n,) [N m] of drives at speed qd (n,) [rad/s]: full effort, except that the torque
+    pushing a joint in its direction of motion falls linearly from SPEED_KNEE x v_max to 0 at v_max (and
+    brakes beyond)."""
+    band = (1.0 - SPEED_KNEE) * v_max
+    hi = effort_max * np.clip((v_max - qd) / band, -1.0, 1.0)
+    lo = -effort_max * np.clip((v_max + qd) / band, -1.0, 1.0)
+    return lo, hi

@@ -24,7 +24,6 @@ from action_msgs.msg import GoalStatus
 from control_msgs.action import FollowJointTrajectory
 from control_msgs.msg import JointTolerance
 from rcl_interfaces.msg import Log
-from rclpy.action import ActionClient
 from rclpy.context import Context
 from rclpy.executors import SingleThreadedExecutor
 from rclpy.node import Node
@@ -34,6 +33,7 @@ from std_msgs.msg import String
 
 from ur_glue_planner.errors import ClientError
 from ur_glue_planner.execution import ros_conversions as conv
+from ur_glue_planner.execution.action_client import ActionClient
 from ur_glue_planner.motion.kinematics import IkResult, Kinematics
 
 DEFAULT_CONTROLLER = 'scaled_joint_trajectory_controller'

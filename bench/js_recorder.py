@@ -1,0 +1,40 @@
+"""`python -m bench.js_recorder OUT SECONDS`: record arrival times of /joint_states in a process of its own.
+
+The benchmark that sends a 100,000-point trajectory spends seconds building and serializing it while holding
+its GIL; a recorder in that process would see gaps that are its own. This one writes one line per message,
+``monotonic_arrival stamp`` (time.monotonic is one clock for every process on the machine).
+"""
+from __future__ import annotations
+
+import sys
+import time
+
+import rclpy
+from rclpy.node import Node
+from rclpy.qos import QoSProfile
+from sensor_msgs.msg import JointState
+
+
+def main() -> int:
+    out, seconds = sys.argv[1], float(sys.argv[2])
+    rclpy.init()
+    node = Node('bench_js_recorder')
+    rows: list[tuple[float, float]] = []
+    node.create_subscription(
+        JointState, '/joint_states',
+        lambda m: rows.append((time.monotonic(), m.header.stamp.sec + m.header.stamp.nanosec * 1e-9)),
+        QoSProfile(depth=1000))
+    end = time.monotonic() + seconds
+    try:
+        while time.monotonic() < end:
+            rclpy.spin_once(node, timeout_sec=0.05)
+    finally:
+        with open(out, 'w') as f:
+            f.writelines(f'{w:.6f} {s:.6f}\n' for w, s in rows)
+        node.destroy_node()
+        rclpy.try_shutdown()
+    return 0
+
+
+if __name__ == '__main__':
+    sys.exit(main())

@@ -1,0 +1,180 @@
+"""The link between the simulation process and the trajectory controller's interface process.
+
+The scaled JTC's action server and joint_trajectory subscription live in a process of their own
+(``trajectory_gateway.py``), so that receiving and converting a large trajectory (rclpy deserializes an action
+goal in C while holding the GIL: about 1 s per 100,000 points here) never stops the simulation loop, which must
+publish every 2 ms. The two processes exchange the small messages below over a pipe, in order:
+
+* gateway -> simulation: :class:`Start` (a validated trajectory, in the sender's joint order), :class:`Cancel`;
+* simulation -> gateway: :class:`Ended` (a goal's outcome), :class:`Canceled` (the answer to a Cancel),
+  :class:`Feedback`.
+
+The simulated time is shared through a double in shared memory, written by the simulation every cycle and read
+by the gateway's validation (stamps in the past, stamps far in the future).
+
+The gateway is started as ``python -m ur_sim_driver.trajectory_gateway`` with the pipe (a socket pair) and the
+shared memory (a memfd) handed over as file descriptors, not through multiprocessing's spawn, which re-imports
+the caller's main module: a user's plain script that builds a UrSimNode without an ``if __name__`` guard would
+start itself again.
+"""
+from __future__ import annotations
+
+import mmap
+import os
+import queue
+import socket
+import struct
+import subprocess
+import sys
+import threading
+from collections.abc import Callable, Hashable
+from dataclasses import dataclass
+from multiprocessing.connection import Connection
+
+import numpy as np
+
+from ur_sim_driver.command_arrays import CommandArrays
+from ur_sim_driver.trajectory_types import SegmentTolerances
+
+
+@dataclass(frozen=True)
+class GatewayConfig:
+    """What the gateway process needs to serve the controller's interfaces (picklable).
+
+    Attributes:
+        node_name: the controller's name (its node, as in ros2_control).
+        namespace: namespace of every interface ('' or '/ur10').
+        joints: n controller joint names (with the tf_prefix).
+        q_min, q_max, v_max: (n,) joint limits [rad], [rad/s], used only with `strict_limits`.
+        strict_limits: reject positions outside the limits and velocities above them (stricter than upstream).
+        allow_partial: upstream allow_partial_joints_goal.
+        allow_nonzero_end_velocity: upstream allow_nonzero_velocity_at_trajectory_end.
+        defaults: the controller's default tolerances (resolved with each goal's in the gateway).
+    """
+
+    node_name: str
+    namespace: str
+    joints: tuple[str, ...]
+    q_min: np.ndarray
+    q_max: np.ndarray
+    v_max: np.ndarray
+    strict_limits: bool
+    allow_partial: bool
+    allow_nonzero_end_velocity: bool
+    defaults: SegmentTolerances
+
+
+@dataclass(frozen=True, eq=False)
+class Start:
+    """Replace the active trajectory. `token` names an action goal; None for a topic message."""
+
+    token: bytes | None
+    command: CommandArrays
+    tolerances: SegmentTolerances | None
+
+
+@dataclass(frozen=True)
+class Cancel:
+    """The client asked to cancel goal `token`."""
+
+    token: bytes
+
+
+@dataclass(frozen=True)
+class Ended:
+    """Goal `token` ended with `code` (control_msgs result code) and `message`."""
+
+    token: Hashable
+    code: int
+    message: str
+
+
+@dataclass(frozen=True)
+class Canceled:
+    """Answer to :class:`Cancel`: `ok` when the goal was still active and now holds."""
+
+    token: bytes
+    ok: bool
+
+
+@dataclass(frozen=True, eq=False)
+class Feedback:
+    """One FollowJointTrajectory feedback: time [s] and (n,) desired/actual/error arrays."""
+
+    token: bytes
+    t: float
+    desired: tuple[np.ndarray, np.ndarray, np.ndarray]
+    actual: tuple[np.ndarray, np.ndarray]
+    error: tuple[np.ndarray, np.ndarray]
+
+
+STOP = 'stop'  # sent last: the gateway ends its goals and exits
+
+
+class GatewayLink:
+    """The simulation side: starts the gateway process, receives from it in a thread, sends from another.
+
+    Args:
+        config: the gateway's configuration.
+        on_message: called in the receiving thread for every :class:`Start` and :class:`Cancel`.
+    """
+
+    def __init__(self, config: GatewayConfig, on_message: Callable[[object], None]) -> None:
+        parent_end, child_end = socket.socketpair()
+        time_fd = os.memfd_create('ur_sim_time')
+        os.ftruncate(time_fd, 8)
+        self._time = mmap.mmap(time_fd, 8)
+        self.process = subprocess.Popen(
+            [sys.executable, '-m', 'ur_sim_driver.trajectory_gateway', str(child_end.fileno()), str(time_fd)],
+            pass_fds=(child_end.fileno(), time_fd))
+        child_end.close()
+        os.close(time_fd)
+        self._conn = Connection(parent_end.detach())
+        self._conn.send(config)
+        self._on_message = on_message
+        self._outbox: queue.SimpleQueue = queue.SimpleQueue()
+        self._closed = threading.Event()
+        self._receiver = threading.Thread(target=self._receive, name='gateway_receive', daemon=True)
+        self._sender = threading.Thread(target=self._send, name='gateway_send', daemon=True)
+        self._receiver.start()
+        self._sender.start()
+
+    def set_sim_time(self, t: float) -> None:
+        """Publish the simulated time [s] to the gateway (every control cycle)."""
+        struct.pack_into('d', self._time, 0, t)
+
+    def send(self, message: object) -> None:
+        """Queue a message for the gateway; never blocks (the simulation loop calls this)."""
+        self._outbox.put(message)
+
+    def _send(self) -> None:
+        while True:
+            message = self._outbox.get()
+            try:
+                self._conn.send(message)
+            except (OSError, EOFError, BrokenPipeError):
+                return
+            if message is STOP:
+                return
+
+    def _receive(self) -> None:
+        while not self._closed.is_set():
+            try:
+                message = self._conn.recv()
+            except (OSError, EOFError):
+                return
+            self._on_message(message)
+
+    def close(self, timeout: float = 5.0) -> None:
+        """Stop the gateway process (it ends its goals as aborted) and the threads."""
+        self._closed.set()
+        self._outbox.put(STOP)
+        self._sender.join(timeout=timeout)
+        try:
+            self.process.wait(timeout=timeout)
+        except subprocess.TimeoutExpired:
+            self.process.terminate()
+            self.process.wait(timeout=timeout)
+        self._receiver.join(timeout=timeout)  # the child's end is closed now: recv() has seen EOF
+        self._conn.close()
+        self._time.close()

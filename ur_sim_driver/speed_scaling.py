@@ -1,0 +1,105 @@
+"""The emulated UR controller's own speed scaling: the robot slows itself when it cannot follow.
+
+On a real UR the controller lowers its actual speed ("speed scaling", the driver's
+``speed_scaling_factor`` state interface) when the commanded motion would exceed a joint limit, and the
+driver's ``scaled_joint_trajectory_controller`` advances trajectory time by that factor, so the reference
+waits for the arm instead of running away from it. Sources: the UR ROS 2 driver documentation (speed
+scaling, ``ur_controllers``' scaled JTC: trajectory time advances by period x factor) and the UR manual's
+description of speed scaling below joint speed and torque limits. UR does not publish the algorithm, so the
+model below is ours; its two time constants are estimates chosen so that the driver's own integration tests
+(``integration_test_scaled_joint_controller.py``: 1 rad in 0.5 s succeeds, 1 rad in 50 ms violates the path
+tolerance) come out as on the real robot.
+
+Model, per control cycle:
+
+* target factor = min(1, velocity fraction, lag fraction), where the velocity fraction keeps the scaled
+  reference velocity below 98 % of every joint's velocity limit, and the lag fraction falls linearly from 1 to
+  0 as the arm's lag behind the reference grows from ``LAG_DEAD_ZONE`` to ``LAG_DEAD_ZONE + LAG_SPAN`` (the
+  servo is limited in acceleration, or the joint torques saturate);
+* the factor follows the target, falling by at most ``period / FALL_TIME`` per cycle (the robot's reaction
+  time) and rising by at most ``period / RISE_TIME`` (it speeds up again gently);
+* a lower ``speed_scaling_input`` (the user's factor, e.g. 0 to pause) is applied at once, but ramped so
+  that the reference decelerates at the joints' acceleration limit rather than stopping dead, which the arm
+  could not follow without passing the paused reference.
+
+Trajectory time advances by ``period x input x factor``.
+
+A motion that is only mildly infeasible is slowed before its lag reaches the path tolerance (0.2 rad by
+default); one that asks far too much (a step, 20 times the speed limit) runs away before the factor has
+fallen and is aborted by the path tolerance, as on the real robot.
+"""
+from __future__ import annotations
+
+import numpy as np
+
+FALL_TIME = 0.04  # [s] the factor can fall from 1 to 0 in this time (5 CB3 cycles, 20 e-series cycles)
+RISE_TIME = 0.5  # [s] ... and rise from 0 to 1 in this time
+LAG_DEAD_ZONE = 0.01  # [rad] lag the robot tolerates before slowing
+LAG_SPAN = 0.1  # [rad] further lag at which the factor reaches 0
+VELOCITY_MARGIN = 0.98  # fraction of the velocity limit the scaled reference may use
+
+
+def velocity_fraction(rate: np.ndarray, v_max: np.ndarray, input_factor: float) -> float:
+    """Largest factor in [0, 1] keeping |rate x input_factor x factor| <= 98 % of v_max.
+
+    Args:
+        rate: (n,) reference velocity per unit trajectory time [rad/s at factor 1].
+        v_max: (n,) velocity limits [rad/s].
+        input_factor: the speed_scaling_input factor, in [0, 1].
+    """
+    demand = np.abs(rate) * input_factor
+    with np.errstate(divide='ignore'):
+        fractions = np.where(demand > 0.0, VELOCITY_MARGIN * v_max / demand, np.inf)
+    return float(min(1.0, fractions.min()))
+
+
+def lag_fraction(lag: np.ndarray) -> float:
+    """Factor in [0, 1] from the largest lag (n,) [rad] of the arm behind the reference."""
+    worst = float(np.abs(lag).max()) if lag.size else 0.0
+    return float(np.clip(1.0 - (worst - LAG_DEAD_ZONE) / LAG_SPAN, 0.0, 1.0))
+
+
+class RobotSpeedScaling:
+    """The robot's actual speed scaling factor, updated once per control cycle.
+
+    Args:
+        v_max: (n,) joint velocity limits [rad/s].
+        a_max: (n,) joint acceleration limits [rad/s^2] (for the ramp of the input factor).
+        input_factor: initial speed_scaling_input factor in [0, 1].
+
+    Attributes:
+        factor: the robot's own factor in [0, 1] (what the speed scaling broadcaster reports).
+        input: the speed_scaling_input factor as applied (ramped down, see the module docstring).
+    """
+
+    def __init__(self, v_max: np.ndarray, a_max: np.ndarray, input_factor: float = 1.0) -> None:
+        self.v_max = np.asarray(v_max, dtype=float)
+        self.a_max = np.asarray(a_max, dtype=float)
+        self.factor = 1.0
+        self.input = float(input_factor)
+
+    @property
+    def total(self) -> float:
+        """input x factor: what trajectory time advances by per unit of real time."""
+        return self.input * self.factor
+
+    def update(self, rate: np.ndarray, lag: np.ndarray, input_factor: float, period: float) -> float:
+        """Advance one cycle and return the new factor.
+
+        Args:
+            rate: (n,) reference velocity per unit trajectory time [rad/s at factor 1].
+            lag: (n,) reference - measured position [rad].
+            input_factor: speed_scaling_input factor in [0, 1].
+            period: control period [s].
+        """
+        if input_factor < self.input:
+            speed = np.abs(rate) * self.factor
+            with np.errstate(divide='ignore'):
+                ramp = float(np.min(np.where(speed > 0.0, self.a_max / speed, np.inf))) * period
+            self.input = max(float(input_factor), self.input - ramp)
+        else:
+            self.input = float(input_factor)
+        target = min(velocity_fraction(rate, self.v_max, self.input), lag_fraction(lag))
+        step_down, step_up = period / FALL_TIME, period / RISE_TIME
+        self.factor = float(np.clip(target, self.factor - step_down, self.factor + step_up))
+        return self.factor

@@ -1,0 +1,258 @@
+"""The scaled JTC's ROS interfaces, in a process of their own (see ``gateway_link.py`` for why).
+
+This process is the controller's node, as in ros2_control, where every controller is a node named after it:
+it serves ``~/follow_joint_trajectory`` and subscribes to ``~/joint_trajectory``, validates what arrives,
+and hands each accepted trajectory to the simulation process, which executes it and reports back.
+
+Order: goal requests, their acceptance and topic messages are handled one at a time in one mutually
+exclusive callback group, and each accepted trajectory is handed over at acceptance, in that order. So the
+newest accepted goal is the one that runs, and the ones it replaces end as upstream's do: aborted,
+INVALID_GOAL "Current goal preempted by new incoming action.".
+"""
+from __future__ import annotations
+
+import faulthandler
+import mmap
+import signal
+import struct
+import sys
+import threading
+from multiprocessing.connection import Connection
+
+import rclpy
+from control_msgs.action import FollowJointTrajectory
+from rclpy.action import ActionServer, CancelResponse, GoalResponse
+from rclpy.callback_groups import MutuallyExclusiveCallbackGroup
+from rclpy.executors import ExternalShutdownException, MultiThreadedExecutor
+from rclpy.node import Node
+from rclpy.signals import SignalHandlerOptions
+from trajectory_msgs.msg import JointTrajectory
+
+from ur_sim_driver import conversions as conv
+from ur_sim_driver import result_codes
+from ur_sim_driver.cdr import parse_joint_trajectory
+from ur_sim_driver.command_arrays import CommandArrays, from_points
+from ur_sim_driver.errors import TrajectoryError
+from ur_sim_driver.gateway_link import STOP, Cancel, Canceled, Ended, Feedback, GatewayConfig, Start
+from ur_sim_driver.memory import release_memory, use_mmap_for_large_blocks
+from ur_sim_driver.tolerances import resolve_tolerances
+from ur_sim_driver.validation import validate_trajectory
+
+# From this many points on, the memory of a received trajectory is handed back to the system when it is done.
+LARGE_TRAJECTORY = 10_000
+# A start stamp this far ahead of the simulated clock is accepted (upstream does) but logged [s].
+FAR_FUTURE = 5.0
+_SHUTDOWN = Ended(None, result_codes.INVALID_GOAL, 'ur_sim is shutting down.')
+
+
+class _Waiter:
+    """One goal's end, handed from the receiving thread to the goal's execute callback."""
+
+    def __init__(self) -> None:
+        self.event = threading.Event()
+        self.ended: Ended | None = None
+        self.canceled: bool | None = None
+
+
+class TrajectoryGateway:
+    """The controller's action server and topic subscription on `node`, talking to the simulation over `conn`."""
+
+    def __init__(self, node: Node, cfg: GatewayConfig, conn: Connection, sim_time: mmap.mmap) -> None:
+        self.node = node
+        self.cfg = cfg
+        self._conn = conn
+        self._send_lock = threading.Lock()
+        self._sim_time = sim_time
+        self._lock = threading.Lock()
+        self._waiters: dict[bytes, _Waiter] = {}
+        self._handles: dict[bytes, object] = {}
+        self._pending: dict[int, CommandArrays] = {}  # converted goals between goal callback and acceptance
+        self.stopped = threading.Event()
+        ns = cfg.namespace.strip('/')
+        base = f'/{ns}/{cfg.node_name}' if ns else f'/{cfg.node_name}'
+        ordered = MutuallyExclusiveCallbackGroup()
+        self._action = ActionServer(
+            node, FollowJointTrajectory, f'{base}/follow_joint_trajectory', execute_callback=self._execute,
+            goal_callback=self._on_goal, handle_accepted_callback=self._on_accepted,
+            cancel_callback=lambda _: CancelResponse.ACCEPT, callback_group=ordered)
+        node.create_subscription(JointTrajectory, f'{base}/joint_trajectory', self._on_topic, 10,
+                                 callback_group=ordered, raw=True)
+        self._receiver = threading.Thread(target=self._receive, name='gateway_receive', daemon=True)
+        self._receiver.start()
+
+    # ---- validation --------------------------------------------------------------------------------
+    def _validate(self, cmd: CommandArrays, what: str) -> str | None:
+        cfg = self.cfg
+        (now,) = struct.unpack_from('d', self._sim_time, 0)
+        strict = cfg.strict_limits
+        reason = validate_trajectory(
+            cmd, joint_names_config=cfg.joints, now=now, q_min=cfg.q_min if strict else None,
+            q_max=cfg.q_max if strict else None, v_max=cfg.v_max if strict else None,
+            allow_partial=cfg.allow_partial, allow_nonzero_end_velocity=cfg.allow_nonzero_end_velocity)
+        if reason is None and cmd.header_stamp - now > FAR_FUTURE:
+            self.node.get_logger().warning(
+                f'{what} starts at header.stamp {cmd.header_stamp:.3f} s, {cmd.header_stamp - now:.1f} s after '
+                f'the simulated time now ({now:.3f} s); it waits until then. A client stamping with its wall '
+                'clock while ur_sim runs on simulated time (use_sim_time:=true for the client) is the likely '
+                'cause; a zero stamp starts at once.')
+        return reason
+
+    def _on_goal(self, goal: FollowJointTrajectory.Goal) -> GoalResponse:
+        traj = goal.trajectory
+        cmd = from_points(traj.joint_names, conv.time_to_sec(traj.header.stamp), traj.points)
+        reason = self._validate(cmd, 'FollowJointTrajectory goal')
+        if reason is None and goal.multi_dof_trajectory.points:
+            reason = 'multi_dof_trajectory is not supported by this controller (it has no multi-DOF joints)'
+        if reason is not None:
+            self.node.get_logger().error(f'Rejected FollowJointTrajectory goal: {reason}')
+            return GoalResponse.REJECT
+        self._pending[id(goal)] = cmd
+        return GoalResponse.ACCEPT
+
+    def _on_accepted(self, goal_handle) -> None:
+        goal = goal_handle.request
+        cmd = self._pending.pop(id(goal))
+        tolerances, reason = resolve_tolerances(
+            self.cfg.defaults, self.cfg.joints, conv.tolerance_specs(goal.path_tolerance),
+            conv.tolerance_specs(goal.goal_tolerance), conv.duration_to_sec(goal.goal_time_tolerance))
+        if reason is not None:
+            self.node.get_logger().error(f'Goal tolerances ignored, using the defaults: {reason}')
+        token = bytes(goal_handle.goal_id.uuid)
+        with self._lock:
+            self._waiters[token] = _Waiter()
+            self._handles[token] = goal_handle
+        self._send(Start(token, cmd, tolerances))
+        goal_handle.execute()
+
+    def _on_topic(self, data: bytes) -> None:
+        try:
+            cmd = parse_joint_trajectory(data)
+        except TrajectoryError as exc:
+            self.node.get_logger().error(f'Dropped JointTrajectory message: {exc}')
+            return
+        reason = self._validate(cmd, 'JointTrajectory message')
+        if reason is not None:
+            self.node.get_logger().error(f'Dropped JointTrajectory message: {reason}')
+            return
+        self._send(Start(None, cmd, None))
+
+    # ---- execution -----------------------------------------------------------------------------------
+    def _execute(self, goal_handle) -> FollowJointTrajectory.Result:
+        token = bytes(goal_handle.goal_id.uuid)
+        with self._lock:
+            waiter = self._waiters[token]
+        cancel_sent = False
+        while not waiter.event.wait(0.005):
+            if goal_handle.is_cancel_requested and not cancel_sent:
+                self._send(Cancel(token))
+                cancel_sent = True
+        with self._lock:
+            self._waiters.pop(token, None)
+            self._handles.pop(token, None)
+        # Drop the (possibly huge) request: rclpy keeps the handle until the result expires (15 min).
+        large = len(goal_handle.request.trajectory.points) >= LARGE_TRAJECTORY
+        goal_handle._goal_request = None
+        if large:
+            # Once more a little later: rclpy lets go of the message's last references after this returns.
+            release_memory()
+            threading.Timer(1.0, release_memory).start()
+        if waiter.canceled:
+            goal_handle.canceled()
+            self.node.get_logger().info('Goal canceled; holding the measured position')
+            return FollowJointTrajectory.Result(error_code=result_codes.SUCCESSFUL,
+                                                error_string='Goal canceled by the client.')
+        ended = waiter.ended
+        result = FollowJointTrajectory.Result(error_code=ended.code, error_string=ended.message)
+        if ended.code == result_codes.SUCCESSFUL:
+            goal_handle.succeed()
+        else:
+            self.node.get_logger().warning(f'Goal aborted ({result_codes.NAMES[ended.code]}): {ended.message}')
+            goal_handle.abort()
+        return result
+
+    def _send(self, message: object) -> None:
+        with self._send_lock:
+            try:
+                self._conn.send(message)
+            except (OSError, BrokenPipeError):
+                pass  # the simulation is gone; the receiving thread ends every goal
+
+    def _receive(self) -> None:
+        try:
+            while True:
+                message = self._conn.recv()
+                if message == STOP:
+                    break
+                self._dispatch(message)
+        except (OSError, EOFError):
+            pass
+        with self._lock:
+            waiters = list(self._waiters.values())
+        for waiter in waiters:
+            if not waiter.event.is_set():
+                waiter.ended = _SHUTDOWN
+                waiter.event.set()
+        self.stopped.set()
+
+    def _dispatch(self, message: object) -> None:
+        with self._lock:
+            waiter = self._waiters.get(message.token)
+            handle = self._handles.get(message.token)
+        if waiter is None:
+            return
+        if isinstance(message, Ended):
+            waiter.ended = message
+            waiter.event.set()
+        elif isinstance(message, Canceled):
+            if message.ok:
+                waiter.canceled = True
+                waiter.event.set()
+        elif isinstance(message, Feedback) and handle is not None:
+            fb = FollowJointTrajectory.Feedback()
+            fb.header.stamp = conv.sec_to_time(message.t)
+            fb.joint_names = list(self.cfg.joints)
+            fb.desired = conv.trajectory_point(*message.desired)
+            fb.actual = conv.trajectory_point(*message.actual)
+            fb.error = conv.trajectory_point(*message.error)
+            try:
+                handle.publish_feedback(fb)
+            except Exception:  # the goal may have ended in an executor thread meanwhile
+                pass
+
+
+def run_gateway(conn: Connection, sim_time: mmap.mmap) -> None:
+    """Serve the controller's interfaces until the simulation says stop (or its end of the pipe closes)."""
+    # The parent stops this process through the pipe; Ctrl-C in a terminal reaches both, and the parent must
+    # be the one to decide (it ends the goals first).
+    signal.signal(signal.SIGINT, signal.SIG_IGN)
+    faulthandler.register(signal.SIGUSR1)  # `kill -USR1 <pid>` prints every thread's stack, for a hang
+    use_mmap_for_large_blocks()
+    cfg: GatewayConfig = conn.recv()
+    rclpy.init(signal_handler_options=SignalHandlerOptions.NO)
+    node = Node(cfg.node_name, namespace=cfg.namespace or '/')
+    gateway = TrajectoryGateway(node, cfg, conn, sim_time)
+    executor = MultiThreadedExecutor(num_threads=4)
+    executor.add_node(node)
+    try:
+        while not gateway.stopped.is_set() and rclpy.ok():
+            executor.spin_once(timeout_sec=0.05)
+        # Let the execute callbacks return their (shutdown) results before the context goes.
+        for _ in range(20):
+            executor.spin_once(timeout_sec=0.01)
+    except (KeyboardInterrupt, ExternalShutdownException):
+        pass
+    finally:
+        executor.shutdown(timeout_sec=2.0)
+        node.destroy_node()
+        rclpy.try_shutdown()
+        conn.close()
+
+
+def main() -> None:
+    """``python -m ur_sim_driver.trajectory_gateway PIPE_FD TIME_FD``, as GatewayLink starts it."""
+    pipe_fd, time_fd = int(sys.argv[1]), int(sys.argv[2])
+    run_gateway(Connection(pipe_fd), mmap.mmap(time_fd, 8))
+
+
+if __name__ == '__main__':
+    main()
