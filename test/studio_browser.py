@@ -93,7 +93,7 @@ def screenshot(page, name: str) -> Path:
     return path
 
 
-def dismiss_toasts(page, timeout: float = 15.0) -> None:
+def dismiss_toasts(page, timeout: float = 10.0) -> None:
     """Close the page's 'software WebGL rendering' notice (shown without a GPU) so that it covers nothing."""
     notice = page.locator('#webgl-software-rendering')
     try:
@@ -105,12 +105,15 @@ def dismiss_toasts(page, timeout: float = 15.0) -> None:
 
 
 def free_port() -> int:
+    """A TCP port free on the loopback interface now."""
     with socket.socket() as s:
         s.bind(('127.0.0.1', 0))
         return s.getsockname()[1]
 
 
 def open_page(browser, studio, viewport: dict = VIEWPORT):
+    """A new page on the studio: (page, the studio's handle of that page's client); page.ws_frames collects the
+    arrival times of its websocket messages."""
     page = browser.new_page(viewport=viewport)
     # Arrival times of the page's websocket messages (viser's socket lives in a web worker, which the DevTools
     # network domain of the page does not see; Playwright reports its frames as the test pumps events).

@@ -2,8 +2,8 @@
 
 Stages, each with a screenshot under out/studio_test/: a click on the glass adds a waypoint at the surface point
 under that pixel; the keys turn a waypoint's orientation by the step and C saves it; Save writes the taught job;
-Plan shows the seed's figures; Run executes on ur_sim and reports success while the page shows the robot live;
-Stop cancels; without a job the studio is a live viewer.
+Plan shows the seed's figures and plays; Run executes on ur_sim and reports success while the page draws the live
+robot's tip path; Stop cancels. The live viewer without a job is in test_studio_live_browser.py.
 """
 from __future__ import annotations
 
