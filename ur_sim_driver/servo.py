@@ -18,6 +18,7 @@ Time is explicit: :meth:`JointServo.step` takes the control period.
 """
 from __future__ import annotations
 
+import math
 from dataclasses import dataclass
 
 import numpy as np
@@ -105,41 +106,65 @@ class JointServo:
         Returns:
             The setpoint; the generator's state advances to the next cycle.
         """
-        p, v = self._p, self._v
-        feasible = (np.abs(rd) <= limits.v_max) & (np.abs(rdd) <= limits.a_max)
-        # On the reference: within what one period of the acceleration limit can change (the setpoint's own
-        # integration drifts from a cubic or quintic by jerk dt^3, far less).
-        on_ref = (np.abs(p - r) <= limits.a_max * dt * dt) & (np.abs(v - rd) <= limits.a_max * dt) & feasible
-        # Off the reference: aim at the reference velocity plus the approach velocity of the remaining gap.
-        v_goal = rd + approach_velocity(r - p, self._gain, limits.a_max)
-        a = np.clip((v_goal - v) / dt, -limits.a_max, limits.a_max)
-        a = np.where(on_ref, rdd, a)
-        v_next = np.clip(v + a * dt, -limits.v_max, limits.v_max)
-        v_next = self._brake(p, v, v_next, limits.q_min, limits.a_stop, dt, toward=-1.0)
-        v_next = self._brake(p, v, v_next, limits.q_max, limits.a_stop, dt, toward=+1.0)
-        if stop is not None:
-            ahead = np.sign(stop - p)
-            braked = self._brake(p, v, v_next, stop, limits.a_stop, dt, toward=np.where(ahead != 0.0, ahead, 1.0))
-            v_next = np.where(ahead != 0.0, braked, v_next)
-        a = np.where(on_ref & (v_next == v + a * dt), a, (v_next - v) / dt)
-        setpoint = Setpoint(np.where(on_ref, r, p), np.where(on_ref, rd, v), a, ~on_ref)
-        # Advance with constant acceleration over the period (exact for the double integrator).
-        self._p = setpoint.positions + setpoint.velocities * dt + 0.5 * a * dt * dt
-        self._v = setpoint.velocities + a * dt
-        return setpoint
+        # Per joint in plain floats: for six joints that is several times faster than numpy's per-call
+        # overhead, and this runs every control cycle.
+        n = len(r)
+        gain = self._gain
+        out_p, out_v, out_a = [0.0] * n, [0.0] * n, [0.0] * n
+        limited = [False] * n
+        p_next, v_next_all = [0.0] * n, [0.0] * n
+        rl, rdl, rddl = r.tolist(), rd.tolist(), rdd.tolist()
+        pl, vl = self._p.tolist(), self._v.tolist()
+        vmax, amax, astop = limits.v_max.tolist(), limits.a_max.tolist(), limits.a_stop.tolist()
+        qmin, qmax = limits.q_min.tolist(), limits.q_max.tolist()
+        stops = stop.tolist() if stop is not None else None
+        for k in range(n):
+            rk, rdk, rddk, pk, vk, vm, am = rl[k], rdl[k], rddl[k], pl[k], vl[k], vmax[k], amax[k]
+            # On the reference: within what one period of the acceleration limit can change (the setpoint's
+            # own integration drifts from a cubic or quintic by jerk dt^3, far less), and it is feasible.
+            on_ref = (abs(rdk) <= vm and abs(rddk) <= am and abs(pk - rk) <= am * dt * dt
+                      and abs(vk - rdk) <= am * dt)
+            if on_ref:
+                a = rddk
+            else:
+                # Aim at the reference velocity plus the approach velocity of the remaining gap.
+                gap = rk - pk
+                d = abs(gap)
+                approach = min(gain * d, math.sqrt(2.0 * _APPROACH_SHARE * am * d))
+                v_goal = rdk + (approach if gap > 0.0 else -approach)
+                a = min(max((v_goal - vk) / dt, -am), am)
+            v_free = vk + a * dt
+            v_new = min(max(v_free, -vm), vm)
+            v_new = _brake(pk, vk, v_new, qmin[k], qmax[k], stops[k] if stops is not None else None, astop[k], dt)
+            if not (on_ref and v_new == v_free):
+                a = (v_new - vk) / dt
+            sp_p, sp_v = (rk, rdk) if on_ref else (pk, vk)
+            out_p[k], out_v[k], out_a[k], limited[k] = sp_p, sp_v, a, not on_ref
+            # Advance with constant acceleration over the period (exact for the double integrator).
+            p_next[k] = sp_p + sp_v * dt + 0.5 * a * dt * dt
+            v_next_all[k] = sp_v + a * dt
+        self._p = np.array(p_next)
+        self._v = np.array(v_next_all)
+        return Setpoint(np.array(out_p), np.array(out_v), np.array(out_a), np.array(limited))
 
-    @staticmethod
-    def _brake(p: np.ndarray, v: np.ndarray, v_next: np.ndarray, stop: np.ndarray, a: np.ndarray,
-               dt: float, toward: float | np.ndarray) -> np.ndarray:
-        """Limit the next velocity towards `stop` (direction `toward`, +-1) to one that can still stop there.
 
-        Discrete form of v <= sqrt(2 a d): moving at the mean of v and v_next for one period, then braking
-        at `a`, must end before `stop`: (v + v_next) dt / 2 + v_next^2 / (2 a) <= d.
-        """
-        distance = np.maximum((stop - p) * toward, 0.0)
-        speed = np.maximum(v * toward, 0.0)
-        half = 0.5 * a * dt
-        room = np.maximum(distance - 0.5 * speed * dt, 0.0)
-        v_allowed = -half + np.sqrt(half * half + 2.0 * a * room)
-        moving_toward = v_next * toward > 0.0
-        return np.where(moving_toward & (np.abs(v_next) > v_allowed), toward * v_allowed, v_next)
+def _brake(p: float, v: float, v_next: float, q_min: float, q_max: float, stop: float | None, a: float,
+           dt: float) -> float:
+    """Limit one joint's next velocity to one that can still stop at every stop point ahead: both position
+    limits and `stop` [rad] if given.
+
+    Discrete form of v <= sqrt(2 a d): moving at the mean of v and v_next for one period, then braking at `a`,
+    must end before the stop point: (v + v_next) dt / 2 + v_next^2 / (2 a) <= d.
+    """
+    if v_next == 0.0:
+        return v_next
+    toward = 1.0 if v_next > 0.0 else -1.0
+    # The nearest stop point in the direction of motion.
+    distance = (q_max - p) if toward > 0.0 else (p - q_min)
+    if stop is not None and (stop - p) * toward > 0.0:  # a stop point behind, or exactly here, does not brake
+        distance = min(distance, (stop - p) * toward)
+    distance = max(distance, 0.0)
+    half = 0.5 * a * dt
+    room = max(distance - 0.5 * max(v * toward, 0.0) * dt, 0.0)
+    allowed = math.sqrt(half * half + 2.0 * a * room) - half
+    return toward * allowed if abs(v_next) > allowed else v_next

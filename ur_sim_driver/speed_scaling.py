@@ -47,16 +47,15 @@ def velocity_fraction(rate: np.ndarray, v_max: np.ndarray, input_factor: float) 
         v_max: (n,) velocity limits [rad/s].
         input_factor: the speed_scaling_input factor, in [0, 1].
     """
-    demand = np.abs(rate) * input_factor
-    with np.errstate(divide='ignore'):
-        fractions = np.where(demand > 0.0, VELOCITY_MARGIN * v_max / demand, np.inf)
-    return float(min(1.0, fractions.min()))
+    # Largest demand relative to its limit decides; no division by a zero demand.
+    worst = float((np.abs(rate) / v_max).max()) * input_factor
+    return 1.0 if worst <= VELOCITY_MARGIN else VELOCITY_MARGIN / worst
 
 
 def lag_fraction(lag: np.ndarray) -> float:
     """Factor in [0, 1] from the largest lag (n,) [rad] of the arm behind the reference."""
     worst = float(np.abs(lag).max()) if lag.size else 0.0
-    return float(np.clip(1.0 - (worst - LAG_DEAD_ZONE) / LAG_SPAN, 0.0, 1.0))
+    return min(1.0, max(0.0, 1.0 - (worst - LAG_DEAD_ZONE) / LAG_SPAN))
 
 
 class RobotSpeedScaling:
@@ -101,5 +100,5 @@ class RobotSpeedScaling:
             self.input = float(input_factor)
         target = min(velocity_fraction(rate, self.v_max, self.input), lag_fraction(lag))
         step_down, step_up = period / FALL_TIME, period / RISE_TIME
-        self.factor = float(np.clip(target, self.factor - step_down, self.factor + step_up))
+        self.factor = min(max(target, self.factor - step_down), self.factor + step_up)
         return self.factor

@@ -79,12 +79,12 @@ def computed_torque(
     """
     accel = qdd_ref + gains.kp * (q_ref - q) + gains.kd * (qd_ref - qd)
     if v_max is not None and dt > 0.0:
-        accel = np.clip(accel, (-v_max - qd) / dt, (v_max - qd) / dt)
+        accel = np.minimum(np.maximum(accel, (-v_max - qd) / dt), (v_max - qd) / dt)
     tau = mass_matrix @ accel + bias
     lo, hi = -effort_max, effort_max
     if v_max is not None:
         lo, hi = drive_torque_limits(qd, v_max, effort_max)
-    clipped = np.clip(tau, lo, hi)
+    clipped = np.minimum(np.maximum(tau, lo), hi)
     return clipped, clipped != tau
 
 
@@ -93,6 +93,6 @@ def drive_torque_limits(qd: np.ndarray, v_max: np.ndarray, effort_max: np.ndarra
     pushing a joint in its direction of motion falls linearly from SPEED_KNEE x v_max to 0 at v_max (and
     brakes beyond)."""
     band = (1.0 - SPEED_KNEE) * v_max
-    hi = effort_max * np.clip((v_max - qd) / band, -1.0, 1.0)
-    lo = -effort_max * np.clip((v_max + qd) / band, -1.0, 1.0)
+    hi = effort_max * np.minimum(np.maximum((v_max - qd) / band, -1.0), 1.0)
+    lo = -effort_max * np.minimum(np.maximum((v_max + qd) / band, -1.0), 1.0)
     return lo, hi
