@@ -85,6 +85,8 @@ def screenshot(page, name: str) -> Path:
     """Write out/studio_test/<name>.png and check that it is not blank (a drawn page has many colours)."""
     SHOTS.mkdir(parents=True, exist_ok=True)
     path = SHOTS / f'{name}.png'
+    # Two animation frames: whatever the page has received is drawn.
+    page.evaluate('new Promise(done => requestAnimationFrame(() => requestAnimationFrame(done)))')
     page.screenshot(path=str(path))
     from PIL import Image
     image = np.asarray(Image.open(path).convert('RGB')).astype(float)

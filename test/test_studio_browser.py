@@ -23,6 +23,7 @@ from studio_browser import (
     open_page,
     pixel_ray,
     project,
+    pump_until,
     screenshot,
     set_camera,
     wait_until,
@@ -170,6 +171,14 @@ def test_plan_shows_the_figures_and_plays(studio, page):
     wait_until(lambda: studio.clock.t > t0 + 0.5, 'the playback to advance')
     page.get_by_role('button', name='pause').click()
     wait_until(lambda: not studio.clock.playing, 'pause')
+    # Scrub: the time field beside the slider (the Plan tab's number fields: time, speed).
+    time_field = page.locator('input:visible').nth(0)
+    sent = len(page.ws_frames)
+    time_field.fill('12.5')
+    time_field.press('Enter')
+    wait_until(lambda: abs(studio.clock.t - 12.5) < 1e-9, 'the scrub to 12.5 s')
+    assert studio.timeline.segment_at(studio.clock.t) == 'bead'
+    pump_until(page, lambda: len(page.ws_frames) > sent, 'the robot pose at 12.5 s to reach the page', 30)
     screenshot(page, '4_plan')
 
 
