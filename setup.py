@@ -28,7 +28,8 @@ setup(
     entry_points={
         'console_scripts': [
             'ur_sim = ur_sim_driver.node:main',
-            'ur_glue_planner = ur_glue_planner.node:main',
+            'ur_glue_planner = ur_glue_planner.execution.node:main',
+            'ur_glue_studio = ur_glue_planner.studio.node:main',
         ],
     },
 )

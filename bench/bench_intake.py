@@ -20,7 +20,7 @@ from rclpy.qos import QoSProfile
 from trajectory_msgs.msg import JointTrajectory, JointTrajectoryPoint
 
 from bench.bench_sim import HOME, JOINTS, _Probe, _SimProcess, _wait
-from ur_glue_planner.action_client import ActionClient
+from ur_glue_planner.execution.action_client import ActionClient
 
 N = 100_000
 CTRL = '/scaled_joint_trajectory_controller'

@@ -13,9 +13,9 @@ from pathlib import Path
 import numpy as np
 import rclpy
 
+from ur_glue_planner.execution.node import run_job
 from ur_glue_planner.job import default_job_path, load_job
-from ur_glue_planner.node import run_job
-from ur_glue_planner.plan import plan_job
+from ur_glue_planner.motion.plan import plan_job
 
 CONFIG = Path(__file__).resolve().parents[1] / 'config'
 

@@ -26,7 +26,7 @@ from rosgraph_msgs.msg import Clock
 from sensor_msgs.msg import JointState
 from trajectory_msgs.msg import JointTrajectoryPoint
 
-from ur_glue_planner.action_client import ActionClient
+from ur_glue_planner.execution.action_client import ActionClient
 from ur_sim_driver.jtc import TrajectoryController
 from ur_sim_driver.sim_config import sim_config_from_params
 from ur_sim_driver.simulator import Simulator

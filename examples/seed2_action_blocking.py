@@ -10,7 +10,7 @@ import argparse
 import numpy as np
 import seed2_common as seed
 
-from ur_glue_planner.plots import plot_joint_states
+from ur_glue_planner.report.plots import plot_joint_states
 
 
 def run(ur, out_dir=None, qtol: float = 0.05, qveltol: float = 0.5, qacctol: float = 0.0) -> dict:

@@ -8,7 +8,7 @@ from __future__ import annotations
 import numpy as np
 import seed2_common as seed
 
-from ur_glue_planner.plots import plot_joint_states
+from ur_glue_planner.report.plots import plot_joint_states
 
 
 def run(ur, out_dir) -> dict:

@@ -4,7 +4,8 @@
 #   2. the interface packages under interfaces/ built with colcon into install/, each only where
 #      no package of that name is importable;
 #   3. this ament_python package built with colcon (--symlink-install) into install/, so that
-#      install/ur_sim_driver/lib/ur_sim_driver/<exe> and the ament index entry exist for `ros2 run`.
+#      install/ur_sim_driver/lib/ur_sim_driver/<exe> and the ament index entry exist for `ros2 run`;
+#   4. Debian's headless-capable chromium for the studio's browser tests, if missing (apt-get, as root).
 # A second run only checks stamps and finishes in seconds.
 set -euo pipefail
 ROOT="$(cd "$(dirname "${BASH_SOURCE[0]}")/.." && pwd)"
@@ -39,6 +40,19 @@ ensure_build_tools() {
   else
     echo "error: missing build tools: ${missing[*]}. Install them (e.g. sudo apt-get install ${missing[*]}) and rerun make setup." >&2
     exit 1
+  fi
+}
+
+# The studio's browser tests drive Debian's chromium through Playwright (which cannot download a browser here).
+# Not needed to run anything else, so a missing browser without root is a note, not an error.
+ensure_chromium() {
+  command -v chromium >/dev/null 2>&1 && return 0
+  if [ "$(id -u)" = 0 ] && command -v apt-get >/dev/null 2>&1; then
+    log "installing chromium with apt-get (for the studio's browser tests)"
+    DEBIAN_FRONTEND=noninteractive apt-get update -qq
+    DEBIAN_FRONTEND=noninteractive apt-get install -y -qq --no-install-recommends chromium fonts-dejavu-core >/dev/null
+  else
+    log "note: no chromium; the studio's browser tests need it (sudo apt-get install chromium)"
   fi
 }
 
@@ -131,6 +145,9 @@ if [ ! -f "$STAMPS/package-$pkg_hash" ] || [ ! -x "$ROOT/install/ur_sim_driver/l
   touch "$STAMPS/package-$pkg_hash"
   source "$ROOT/scripts/env.bash"
 fi
+
+# --- 4. browser for the studio's tests ------------------------------------------------------------
+ensure_chromium
 
 python -c 'import rclpy, control_msgs.action, ur_msgs.srv, ur_dashboard_msgs.srv, controller_manager_msgs.srv, tf2_msgs.msg, ur_sim_driver, ur_glue_planner' \
   || { echo "error: the environment does not import; see log/" >&2; exit 1; }

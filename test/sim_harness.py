@@ -22,7 +22,7 @@ from sensor_msgs.msg import JointState
 from std_msgs.msg import Float64
 from trajectory_msgs.msg import JointTrajectory, JointTrajectoryPoint
 
-from ur_glue_planner.action_client import ActionClient
+from ur_glue_planner.execution.action_client import ActionClient
 from ur_sim_driver.node import UrSimNode
 
 TIMEOUT = 30.0  # [s] wall-clock deadline of any single wait

@@ -3,8 +3,8 @@ import numpy as np
 import pytest
 from sim_harness import running_sim, wait_for
 
-from ur_glue_planner.client import URClient
 from ur_glue_planner.errors import ClientError
+from ur_glue_planner.execution.client import URClient
 
 PRESET = dict(ur_type='ur10', namespace='/ur10', controller_name='vel_based_pos_traj_controller',
               initial_positions=[0.0] * 6, base_pose=[0.0, 0.0, 1.0, 0.0, 0.0, 0.0])
@@ -77,3 +77,11 @@ def test_topic_and_recording(sim_and_client):
     assert abs(rec.q[-1, 0] - rec.q[0, 0]) > 0.01  # it recorded the motion
     h.wait_sim_time(1.5)
     assert np.abs(ur.joint_state().q - (q0 - 0.1)).max() < 0.01
+
+
+def test_the_public_import_path_gives_the_same_client():
+    # Seed 2 scripts import the client from ur_glue_planner.client; the implementation lives in execution/.
+    import ur_glue_planner.client as public
+    from ur_glue_planner.execution import client as impl
+    for name in public.__all__:
+        assert getattr(public, name) is getattr(impl, name), name

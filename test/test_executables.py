@@ -69,3 +69,44 @@ def test_timestamps_are_simulated_time():
     stamp = received[-1].header.stamp
     # Simulated time starts at 0; a wall-clock stamp would be ~1.7e9 s.
     assert 0 < stamp.sec + stamp.nanosec * 1e-9 < time.time() / 1000
+
+
+@pytest.mark.parametrize('job', ['config/glue_job.yaml', ''])
+def test_ur_glue_studio_serves_the_page_and_exits_cleanly(job):
+    # With a job: the studio; without: the live viewer. Both serve viser's page and stop on SIGINT.
+    import socket
+    import urllib.request
+    with socket.socket() as s:
+        s.bind(('127.0.0.1', 0))
+        port = s.getsockname()[1]
+    args = [str(_executable('ur_glue_studio')), '--ros-args', '-p', f'port:={port}']
+    if job:
+        args += ['-p', f'job:={Path(__file__).resolve().parents[1] / job}']
+    proc = subprocess.Popen(args, start_new_session=True, stdout=subprocess.PIPE, stderr=subprocess.STDOUT, text=True)
+    try:
+        deadline = time.monotonic() + 60.0
+        while True:
+            try:
+                page = urllib.request.urlopen(f'http://127.0.0.1:{port}', timeout=2).read().decode()
+                break
+            except OSError:
+                assert proc.poll() is None and time.monotonic() < deadline, 'the studio did not serve its page'
+                time.sleep(0.2)
+        assert '<div id="root">' in page
+    finally:
+        os.killpg(proc.pid, signal.SIGINT)
+        try:
+            out, _ = proc.communicate(timeout=30)
+        except subprocess.TimeoutExpired:
+            proc.kill()
+            raise
+    assert proc.returncode == 0, out
+    assert f'http://127.0.0.1:{port}' in out and 'Traceback' not in out
+    assert ('job ' if job else 'live viewer') in out
+
+
+def test_ur_glue_studio_rejects_a_bad_parameter():
+    proc = subprocess.run([str(_executable('ur_glue_studio')), '--ros-args', '-p', 'port:=99999'],
+                          capture_output=True, text=True, timeout=60)
+    assert proc.returncode == 2
+    assert 'port: 99999 is not an integer in [1, 65535]' in proc.stderr

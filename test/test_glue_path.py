@@ -9,7 +9,6 @@ import pytest
 
 from ur_glue_planner.defaults import DEFAULT_ORIENTATION_ZYX, DEFAULT_WAYPOINTS
 from ur_glue_planner.errors import PlanningError
-from ur_glue_planner.glue_path import GluePath, build_glue_path, polyline_corners
 from ur_glue_planner.orientation import (
     matrix_from_quat,
     quat_from_matrix,
@@ -21,6 +20,7 @@ from ur_glue_planner.orientation import (
     rotation_from_zyx_euler,
     slerp,
 )
+from ur_glue_planner.path.glue_path import GluePath, build_glue_path, polyline_corners
 
 R_DEFAULT = rotation_from_zyx_euler(*DEFAULT_ORIENTATION_ZYX)
 

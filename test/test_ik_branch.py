@@ -9,10 +9,10 @@ import pytest
 
 from ur_glue_planner.defaults import DEFAULT_ORIENTATION_ZYX, DEFAULT_WAYPOINTS
 from ur_glue_planner.errors import PlanningError
-from ur_glue_planner.glue_path import build_glue_path
-from ur_glue_planner.ik_branch import _near, choose_branch, follow, start_branches
-from ur_glue_planner.kinematics import ur_kinematics
+from ur_glue_planner.motion.ik_branch import _near, choose_branch, follow, start_branches
+from ur_glue_planner.motion.kinematics import ur_kinematics
 from ur_glue_planner.orientation import rotation_angle, rotation_from_zyx_euler
+from ur_glue_planner.path.glue_path import build_glue_path
 
 HOME = np.radians([0.0, -90.0, 0.0, -90.0, 0.0, 0.0])
 R_SEED = rotation_from_zyx_euler(*DEFAULT_ORIENTATION_ZYX)

@@ -1,7 +1,7 @@
 """Bead metrics on hand-made data whose answers are known."""
 import numpy as np
 
-from ur_glue_planner.metrics import point_to_polyline_distance, speed_stats, tracking_error
+from ur_glue_planner.report.metrics import point_to_polyline_distance, speed_stats, tracking_error
 
 
 def test_speed_stats_counts_length_within_the_band():

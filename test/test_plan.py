@@ -11,8 +11,8 @@ import pytest
 from ur_glue_planner.defaults import DEFAULT_WAYPOINTS
 from ur_glue_planner.errors import PlanningError
 from ur_glue_planner.job import load_job, parse_job
-from ur_glue_planner.plan import GluePlan, plan_job, speed_within
-from ur_glue_planner.windshield import DEFAULT_WINDSHIELD
+from ur_glue_planner.motion.plan import GluePlan, plan_job, speed_within
+from ur_glue_planner.scene.windshield import DEFAULT_WINDSHIELD
 
 JOB_FILE = Path(__file__).resolve().parents[1] / "config" / "glue_job.yaml"
 V = 0.15

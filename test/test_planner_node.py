@@ -6,7 +6,7 @@ import pytest
 import yaml
 from sim_harness import running_sim
 
-from ur_glue_planner.node import run_job
+from ur_glue_planner.execution.node import run_job
 from ur_sim_driver.scene import config_dir
 
 

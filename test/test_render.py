@@ -2,8 +2,8 @@
 import matplotlib.pyplot as plt
 import numpy as np
 
-from ur_glue_planner.render import render_paths
-from ur_glue_planner.windshield import windshield_pose
+from ur_glue_planner.report.render import render_paths
+from ur_glue_planner.scene.windshield import windshield_pose
 
 
 def test_render_draws_the_path_over_the_windshield(tmp_path):

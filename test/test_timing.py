@@ -7,7 +7,7 @@ import math
 import numpy as np
 import pytest
 
-from ur_glue_planner.timing import SpeedLimit, time_path
+from ur_glue_planner.path.timing import SpeedLimit, time_path
 
 L, V, DT = 2.2, 0.15, 0.02
 

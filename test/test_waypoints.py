@@ -10,8 +10,8 @@ import pytest
 from ur_glue_planner.defaults import DEFAULT_WAYPOINTS
 from ur_glue_planner.job import parse_job
 from ur_glue_planner.orientation import rot_x, rot_z, rotation_angle
-from ur_glue_planner.waypoints import align_axis, job_waypoints, tool_axis, windshield_model
-from ur_glue_planner.windshield import DEFAULT_WINDSHIELD
+from ur_glue_planner.scene.waypoints import align_axis, job_waypoints, tool_axis, windshield_model
+from ur_glue_planner.scene.windshield import DEFAULT_WINDSHIELD
 
 
 def test_dispenser_nozzle_is_the_tip_y_axis():

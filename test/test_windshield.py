@@ -10,7 +10,7 @@ import pytest
 import trimesh
 
 from ur_glue_planner.defaults import DEFAULT_WAYPOINTS
-from ur_glue_planner.windshield import (
+from ur_glue_planner.scene.windshield import (
     DEFAULT_WINDSHIELD,
     build_mesh,
     local_to_world,

@@ -11,8 +11,8 @@ import pytest
 import trimesh
 import yaml
 
-from ur_glue_planner.windshield import DEFAULT_WINDSHIELD, windshield_pose
-from ur_glue_planner.windshield_pieces import (
+from ur_glue_planner.scene.windshield import DEFAULT_WINDSHIELD, windshield_pose
+from ur_glue_planner.scene.windshield_pieces import (
     MAX_DEVIATION,
     convex_hulls,
     grid_cells,

@@ -43,6 +43,19 @@ def rotation_from_zyx_euler(z: float, y: float, x: float) -> np.ndarray:
     return rot_z(z) @ rot_y(y) @ rot_x(x)
 
 
+def zyx_euler_from_rotation(r: np.ndarray) -> tuple[float, float, float]:
+    """ZYX Euler angles (z, y, x) [rad] of a rotation (3, 3): the inverse of :func:`rotation_from_zyx_euler`.
+
+    y lies in [-pi/2, pi/2]; at the gimbal lock (|y| = pi/2) x is taken as 0.
+    """
+    r = np.asarray(r, dtype=float)
+    sy = float(np.clip(-r[2, 0], -1.0, 1.0))
+    y = float(np.arcsin(sy))
+    if abs(sy) < 1.0 - 1e-12:
+        return float(np.arctan2(r[1, 0], r[0, 0])), y, float(np.arctan2(r[2, 1], r[2, 2]))
+    return float(np.arctan2(-r[0, 1], r[1, 1])), y, 0.0
+
+
 def quat_normalize(q: np.ndarray) -> np.ndarray:
     """Unit quaternion(s) (..., 4) with non-negative w (a canonical sign)."""
     q = np.asarray(q, dtype=float)

@@ -19,7 +19,7 @@ import numpy as np
 from ur_glue_planner.errors import JobError
 from ur_glue_planner.job import GlueJob, WindshieldSpec
 from ur_glue_planner.orientation import rotation_from_zyx_euler
-from ur_glue_planner.windshield import DEFAULT_WINDSHIELD, WindshieldModel
+from ur_glue_planner.scene.windshield import DEFAULT_WINDSHIELD, WindshieldModel
 from ur_sim_driver.description.params import rpy_to_matrix
 from ur_sim_driver.description.tool import get_tool
 

@@ -16,15 +16,15 @@ from dataclasses import dataclass
 
 import numpy as np
 
-from ur_glue_planner.approach import JointSegment, joint_move, tool_axis_move
 from ur_glue_planner.errors import PlanningError
-from ur_glue_planner.glue_path import GluePath, build_glue_path
-from ur_glue_planner.ik_branch import Branch, choose_branch
 from ur_glue_planner.job import GlueJob
-from ur_glue_planner.joint_trajectory import JointPlan, build_joint_plan
-from ur_glue_planner.kinematics import Kinematics, ur_kinematics
-from ur_glue_planner.timing import PathTiming, time_path
-from ur_glue_planner.waypoints import job_waypoints, tool_axis
+from ur_glue_planner.motion.approach import JointSegment, joint_move, tool_axis_move
+from ur_glue_planner.motion.ik_branch import Branch, choose_branch
+from ur_glue_planner.motion.joint_trajectory import JointPlan, build_joint_plan
+from ur_glue_planner.motion.kinematics import Kinematics, ur_kinematics
+from ur_glue_planner.path.glue_path import GluePath, build_glue_path
+from ur_glue_planner.path.timing import PathTiming, time_path
+from ur_glue_planner.scene.waypoints import job_waypoints, tool_axis
 from ur_sim_driver.description.params import load_ur_params
 
 

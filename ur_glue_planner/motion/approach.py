@@ -24,7 +24,7 @@ import numpy as np
 from ruckig import DurationDiscretization, InputParameter, Result, Ruckig, RuckigError, Trajectory
 
 from ur_glue_planner.errors import PlanningError
-from ur_glue_planner.kinematics import Kinematics
+from ur_glue_planner.motion.kinematics import Kinematics
 
 DEFAULT_JERK_FACTOR = 5.0  # [1/s] jerk limit = factor * acceleration limit
 

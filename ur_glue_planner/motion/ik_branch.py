@@ -19,8 +19,8 @@ from dataclasses import dataclass
 import numpy as np
 
 from ur_glue_planner.errors import PlanningError
-from ur_glue_planner.glue_path import GluePath
-from ur_glue_planner.kinematics import Kinematics
+from ur_glue_planner.motion.kinematics import Kinematics
+from ur_glue_planner.path.glue_path import GluePath
 
 _TWO_PI = 2.0 * math.pi
 

@@ -12,7 +12,7 @@ hull top over a dense (u, v) grid minus the analytic height ``w = f(u, v)``, in 
 direction (the distance along the surface normal is smaller by the cosine of the slope).
 
 The pieces are written like ``meshes/windshield.stl``: binary STL in metres, LOCAL frame, so
-they take the same pose (:func:`ur_glue_planner.windshield.windshield_pose`).
+they take the same pose (:func:`ur_glue_planner.scene.windshield.windshield_pose`).
 """
 
 from __future__ import annotations
@@ -24,7 +24,7 @@ from pathlib import Path
 import numpy as np
 import trimesh
 
-from ur_glue_planner.windshield import DEFAULT_WINDSHIELD, WindshieldModel, fan_slab
+from ur_glue_planner.scene.windshield import DEFAULT_WINDSHIELD, WindshieldModel, fan_slab
 
 MAX_DEVIATION = 0.0005  # [m] allowed height of a piece's hull above the glue face
 DEFAULT_GRID = (12, 2)  # tiles across (u) and up (v) the glass
@@ -118,7 +118,7 @@ def build_piece(model: WindshieldModel, cell_uv: np.ndarray, resolution: float =
                 frame: str = "local") -> trimesh.Trimesh:
     """Closed slab of the glass over the convex cell ``cell_uv`` (K, 2) [m], counter-clockwise.
 
-    Triangulated like :func:`ur_glue_planner.windshield.build_mesh`: the cell's edges split
+    Triangulated like :func:`ur_glue_planner.scene.windshield.build_mesh`: the cell's edges split
     into pieces of at most ``resolution`` [m], rings shrinking to the centroid; the bottom is
     the top moved by ``thickness`` along the inward normal, and a wall joins the two rims.
     """

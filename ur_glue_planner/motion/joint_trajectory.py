@@ -15,7 +15,7 @@ relative. Velocities and accelerations are therefore exact derivatives of the pl
 motion, not finite differences of the IK samples.
 
 Where a joint would exceed ``velocity_margin * v_max`` or ``acceleration_margin * a_max``,
-the stretch is re-timed at a lower speed (:class:`~ur_glue_planner.timing.SpeedLimit`),
+the stretch is re-timed at a lower speed (:class:`~ur_glue_planner.path.timing.SpeedLimit`),
 smoothly, and reported as a :class:`Slowdown`; this repeats until every sample is within
 the limits.
 """
@@ -29,10 +29,10 @@ from dataclasses import dataclass
 import numpy as np
 
 from ur_glue_planner.errors import PlanningError
-from ur_glue_planner.glue_path import GluePath
-from ur_glue_planner.kinematics import Kinematics
+from ur_glue_planner.motion.kinematics import Kinematics
 from ur_glue_planner.orientation import matrix_from_quat, quat_conjugate, quat_from_matrix, quat_multiply
-from ur_glue_planner.timing import PathTiming, SpeedLimit, Usage, time_path
+from ur_glue_planner.path.glue_path import GluePath
+from ur_glue_planner.path.timing import PathTiming, SpeedLimit, Usage, time_path
 
 _H_ORIENT = 1e-4  # [m] stencil of the orientation derivatives
 
@@ -262,7 +262,7 @@ def build_joint_plan(path: GluePath, timing: PathTiming, kin: Kinematics, q_star
 
     Args:
         path: The bead geometry (world frame).
-        timing: Its nominal time law (:func:`~ur_glue_planner.timing.time_path`); re-timings
+        timing: Its nominal time law (:func:`~ur_glue_planner.path.timing.time_path`); re-timings
             keep its speed, dt and ramp time.
         kin: Kinematics of the tip frame.
         q_start: IK guess (n,) [rad] for the first sample; it picks the arm configuration.

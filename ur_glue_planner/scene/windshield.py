@@ -26,7 +26,7 @@ import numpy as np
 import trimesh
 
 from ur_glue_planner.orientation import rot_x
-from ur_glue_planner.windshield_outline import RoundedPolygon
+from ur_glue_planner.scene.windshield_outline import RoundedPolygon
 
 
 def seed_pose(rx_deg: float = 55.0, location: tuple[float, float, float] = (0.0, 0.4, 0.15)

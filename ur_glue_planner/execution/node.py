@@ -11,82 +11,18 @@ from __future__ import annotations
 import signal
 import sys
 import threading
-import time
 from pathlib import Path
 
 import rclpy
 from rclpy.node import Node
 from rclpy.signals import SignalHandlerOptions
 
-from ur_glue_planner.client import GoalOutcome, URClient
 from ur_glue_planner.errors import ClientError, JobError, PlanningError
+from ur_glue_planner.execution.client import URClient
+from ur_glue_planner.execution.run import Interrupted, execute
 from ur_glue_planner.job import default_job_path, load_job
-from ur_glue_planner.plan import GluePlan, plan_job
-from ur_glue_planner.report import Executed, write_report
-
-RECORD_RATE = 50.0  # [Hz] nominal; the report uses every message received (exact stamps)
-MESSAGES = {
-    0: 'bead completed',
-    -1: 'the goal was invalid or preempted by another command',
-    -2: 'the goal named joints the controller does not have',
-    -3: 'the trajectory started in the past: check that this node and the driver share a clock (use_sim_time)',
-    -4: 'the robot left the path tolerance (it could not follow the trajectory)',
-    -5: 'the robot did not reach the goal tolerance in time',
-}
-
-
-class Interrupted(Exception):
-    """SIGINT or SIGTERM arrived while a goal was running; the goal has been cancelled."""
-
-
-def _progress(name: str, t0: float, duration: float):
-    last = [0.0]
-
-    def show(feedback) -> None:
-        now = time.monotonic()
-        if now - last[0] < 0.5:
-            return
-        last[0] = now
-        t = feedback.header.stamp.sec + feedback.header.stamp.nanosec * 1e-9 - t0
-        error = max((abs(e) for e in feedback.error.positions), default=0.0)
-        pct = 100.0 * min(max(t / duration, 0.0), 1.0)
-        print(f'  [{name}] {pct:5.1f} % of {duration:.1f} s, max joint tracking error {error * 1e3:.3f} mrad',
-              flush=True)
-    return show
-
-
-def execute(ur: URClient, plan: GluePlan, stop: threading.Event) -> tuple[GoalOutcome, Executed | None]:
-    """Run the plan's segments in order; returns the last outcome and the bead's recorded joint states."""
-    job = plan.job
-    path_tol = ur.tolerances(job.tolerances.path_position)
-    goal_tol = ur.tolerances(job.tolerances.goal_position)
-    recorder, outcome, run = None, None, None
-    for seg in plan.segments():
-        t0 = ur.start_time()
-        if seg.name == 'bead':
-            recorder = ur.start_recording(RECORD_RATE, t0)
-        print(f'{seg.name}: {len(seg.times)} points, {seg.duration:.2f} s', flush=True)
-        goal = ur.follow_trajectory(seg.q, seg.qd, seg.qdd, seg.times, path_tolerance=path_tol,
-                                    goal_tolerance=goal_tol, goal_time_tolerance=job.tolerances.goal_time,
-                                    wait=False, start_time=t0, feedback_callback=_progress(seg.name, t0, seg.duration))
-        while not goal.done:
-            if stop.is_set():
-                print(f'\ninterrupted: cancelling the {seg.name} goal', flush=True)
-                goal.cancel()
-                goal.wait(timeout=10.0)
-                raise Interrupted(seg.name)
-            time.sleep(0.02)
-        outcome = goal.wait()
-        if recorder is not None:
-            ur.sleep(0.2)
-            rec = ur.stop_recording(recorder, raw=True)
-            recorder = None
-            run = Executed(rec.t, rec.q, rec.qd)
-        if not outcome.succeeded:
-            print(f'{seg.name} failed: {MESSAGES.get(outcome.error_code, "unknown error code")} '
-                  f'(error_code {outcome.error_code}, status {outcome.status}): {outcome.error_string}', flush=True)
-            return outcome, run
-    return outcome, run
+from ur_glue_planner.motion.plan import plan_job
+from ur_glue_planner.report.glue_report import write_report
 
 
 def run_job(params: dict, stop: threading.Event, context=None) -> int:

@@ -12,9 +12,9 @@ matplotlib.use('Agg')
 import matplotlib.pyplot as plt  # noqa: E402
 import numpy as np  # noqa: E402
 
-from ur_glue_planner.metrics import point_to_polyline_distance, speed_stats, tracking_error  # noqa: E402
-from ur_glue_planner.plan import GluePlan  # noqa: E402
-from ur_glue_planner.plots import plot_joints  # noqa: E402
+from ur_glue_planner.motion.plan import GluePlan  # noqa: E402
+from ur_glue_planner.report.metrics import point_to_polyline_distance, speed_stats, tracking_error  # noqa: E402
+from ur_glue_planner.report.plots import plot_joints  # noqa: E402
 
 
 @dataclass(frozen=True, eq=False)
@@ -142,7 +142,7 @@ def _plot_paths_3d(plan: GluePlan, executed: np.ndarray | None, path: Path) -> N
 
 
 def _render(plan: GluePlan, executed: np.ndarray | None, path: Path) -> None:
-    from ur_glue_planner.render import render_paths
+    from ur_glue_planner.report.render import render_paths
     from ur_sim_driver.scene import config_dir, pose_matrix
     spec = plan.job.windshield
     mesh = Path(spec.mesh) if Path(spec.mesh).is_absolute() else config_dir().parent / spec.mesh

@@ -1,0 +1,74 @@
+"""The studio's page logic without a browser or ROS: picking, keys, the gizmo, plan and playback, save."""
+import time
+
+import numpy as np
+import pytest
+import yaml
+from studio_browser import free_port, wait_until
+
+from ur_glue_planner.orientation import rotation_from_zyx_euler
+from ur_glue_planner.studio import scene_view as sv
+from ur_glue_planner.studio.app import Studio
+from ur_sim_driver.paths import config_dir
+
+
+@pytest.fixture(scope='module')
+def studio():
+    s = Studio(config_dir() / 'glue_job.yaml', port=free_port(), live=None)
+    yield s
+    s.close()
+
+
+def test_a_ray_through_the_glass_adds_the_waypoint_there(studio):
+    studio.load(config_dir() / 'glue_job.yaml')
+    target = studio.glass.surface_point(-0.1, 0.2)
+    origin = target + np.array([0.3, -0.4, 0.8])
+    assert studio.add_at_ray(origin, target - origin)
+    assert studio.teach.selected == 1 and len(studio.teach.waypoints) == 23
+    assert np.linalg.norm(np.array(studio.teach.waypoints[1].position) - target) < 1e-9
+    assert not studio.add_at_ray(origin, [0.0, 0.0, 1.0])
+    assert studio.messages[-1] == 'the click missed the glass'
+
+
+def test_gizmo_moves_along_the_glass_and_turns(studio):
+    studio.load(config_dir() / 'glue_job.yaml')
+    studio._edit(lambda s: s.select(3))
+    uv, foot, normal = studio.glass.project(np.array(studio.teach.waypoints[3].position)[None])
+    dragged = foot[0] + [0.02, 0.0, 0.0] + 0.01 * normal[0]  # off the glass a little
+    turned = rotation_from_zyx_euler(0.0, 0.1, -1.0)
+    assert studio.gizmo_released(3, dragged, sv.wxyz(turned))
+    wp = studio.teach.waypoints[3]
+    _, back, _ = studio.glass.project(np.array(wp.position)[None])
+    assert np.linalg.norm(back[0] - wp.position) < 1e-9  # on the glass
+    assert np.linalg.norm(np.array(wp.position) - foot[0]) == pytest.approx(0.02, abs=1e-3)
+    assert np.allclose(wp.rotation(), turned, atol=1e-9) and not wp.saved
+    before = studio.teach
+    assert not studio.gizmo_released(3, [2.0, 0.0, 0.0], sv.wxyz(turned))  # off the glass: refused
+    assert studio.teach == before
+
+
+def test_reach_marks_an_unreachable_waypoint(studio):
+    studio.load(config_dir() / 'glue_job.yaml')
+    studio._edit(lambda s: s.with_step(10.0))
+    for _ in range(8):  # tip turned 80 deg about Y: the dispenser body would go into the glass
+        studio.key('right')
+    wait_until(lambda: studio.reach_results[0] is not None and not studio.reach_results[0].reachable,
+               'the reach check', timeout=30)
+    assert studio.reach_results[0].reason.startswith('collision with the glass: dispenser')
+    assert '**unreachable**: collision with the glass' in studio._wp_info.content
+    wait_until(lambda: tuple(studio._markers[0].color) == sv.RED, 'the red marker')  # markers: sphere, label, ...
+    assert tuple(studio._markers[2].color) == sv.GREEN
+
+
+def test_plan_playback_and_save(studio, tmp_path):
+    studio.load(config_dir() / 'glue_job.yaml')
+    plan = studio.plan_now()
+    assert plan is not None and studio.timeline.duration == pytest.approx(plan.summary.total_duration)
+    studio._on_play('play')
+    t0 = time.monotonic()
+    wait_until(lambda: studio.clock.t > 0.3, 'the playback clock')
+    assert studio.clock.t <= (time.monotonic() - t0) * studio.clock.speed + 0.1
+    studio._on_play('pause')
+    path = studio.save(tmp_path / 'job.yaml')
+    raw = yaml.safe_load(path.read_text())
+    assert np.array_equal(np.array(raw['path']['waypoints']), studio.teach.planned_arrays()[0])

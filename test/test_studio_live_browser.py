@@ -1,0 +1,94 @@
+"""The studio as a live viewer in a real browser: no job, a robot in its own process, its motion streamed to the page.
+
+Its own module, so that no other studio, page or in-process simulator runs beside it. The update rate itself
+(>= 30 per second) is measured by bench/bench_studio.py (`make bench`), not here: a timed assertion fails whenever
+another job on this 2-core machine takes the CPU.
+"""
+from __future__ import annotations
+
+import os
+import signal
+import subprocess
+import sys
+from pathlib import Path
+
+import numpy as np
+import pytest
+from ament_index_python.packages import get_package_prefix
+from studio_browser import (
+    CHROMIUM_ARGS,
+    chromium_path,
+    free_port,
+    open_page,
+    pump_until,
+    screenshot,
+    set_camera,
+    wait_until,
+)
+
+from ur_glue_planner.client import URClient
+from ur_glue_planner.studio.app import Studio
+from ur_glue_planner.studio.ros_link import LiveRobot
+
+
+@pytest.fixture(scope='module')
+def browser():
+    from playwright.sync_api import sync_playwright
+    pw = sync_playwright().start()
+    b = pw.chromium.launch(executable_path=chromium_path(), args=CHROMIUM_ARGS)
+    yield b
+    b.close()
+    pw.stop()
+
+
+def _ur_sim_process() -> subprocess.Popen:
+    exe = Path(get_package_prefix('ur_sim_driver')) / 'lib' / 'ur_sim_driver' / 'ur_sim'
+    return subprocess.Popen([str(exe), '--ros-args', '-p', 'ur_type:=ur5', '-p', 'tool:=dispenser',
+                             '-p', 'namespace:=/live'], start_new_session=True, stdout=subprocess.DEVNULL,
+                            stderr=subprocess.DEVNULL)
+
+
+def test_without_a_job_the_studio_is_a_live_viewer(browser):
+    # As deployed: the robot (here ur_sim, real time) in its own process, the studio in another; a seed 2 style
+    # namespace. The page must receive the robot's motion as it happens, every second of it.
+    sim = _ur_sim_process()
+    # This process now plays the ur_glue_studio process, which keeps Python's default GIL switch interval
+    # (conftest shortens it for the in-process simulators of the other tests, which would slow the page here).
+    interval = sys.getswitchinterval()
+    sys.setswitchinterval(0.005)
+    live = LiveRobot('/live')
+    viewer = Studio(None, port=free_port(), live=live)
+    try:
+        # A small page: software rendering of a large one takes a core.
+        page, client = open_page(browser, viewer, viewport={'width': 640, 'height': 400})
+        wait_until(lambda: viewer._live_view is not None and viewer.live_updates > 10, 'the live robot')
+        assert viewer.sjob is None
+        set_camera(client, (1.2, -1.0, 1.0), (0.0, 0.3, 0.4))
+        with URClient(namespace='/live', timeout=30.0) as ur:
+            q0 = ur.joint_state().q
+            goal = ur.send_joint_configuration(q0 + np.array([0.8, 0.3, -0.4, 0.3, 0.5, 0.6]), end_time=8.0,
+                                               wait=False)
+            page.wait_for_timeout(1000)  # deliver what arrived before counting
+            page.ws_frames.clear()
+            updates0 = viewer.live_updates
+            pump_until(page, lambda: goal.done, 'the move to end', timeout=60)
+            assert goal.wait().succeeded
+        arrivals = np.array(page.ws_frames)
+        span = arrivals[-1] - arrivals[0]
+        per_second = np.histogram(arrivals, bins=np.arange(arrivals[0], arrivals[-1], 1.0))[0]
+        report = (f'{len(arrivals)} messages in {span:.2f} s; per second {per_second}; '
+                  f'robot updates sent {(viewer.live_updates - updates0) / span:.1f}/s')
+        assert span > 5.0 and per_second.min() >= 5, report  # streamed throughout, not only at the end
+        assert len(viewer._trail) > 100  # the tip path drawn as it went
+        wait_until(lambda: page.get_by_text('Live viewer').count() > 0, 'the live viewer text')
+        screenshot(page, '6_live_viewer')
+        page.close()
+    finally:
+        viewer.close()
+        live.close()
+        sys.setswitchinterval(interval)
+        os.killpg(sim.pid, signal.SIGINT)
+        try:
+            sim.wait(timeout=20)
+        except subprocess.TimeoutExpired:
+            sim.kill()

@@ -1,0 +1,1 @@
+"""Execution: the ROS boundary: the client API, running a plan through FollowJointTrajectory, the planner node."""

@@ -1,0 +1,382 @@
+"""A small client API over rclpy for scripts: the UR driver's interfaces without launch files or MATLAB.
+
+In the spirit of MATLAB's ``universalrobot``: connect, read the joint state, send a trajectory on the topic,
+send a goal through FollowJointTrajectory (blocking, or with a handle for feedback, cancel and wait), record
+joint states, and solve IK. It works against ur_sim and against the real UR driver: it uses only their ROS
+interfaces. Like node.py, this module is a ROS boundary; the rest of ur_glue_planner is pure.
+
+Example:
+    with URClient(namespace='/ur10', controller_name='vel_based_pos_traj_controller') as ur:
+        q = ur.joint_state().q
+        outcome = ur.send_joint_configuration(q + 0.1, end_time=2.0)
+"""
+from __future__ import annotations
+
+import threading
+import time
+from collections import deque
+from collections.abc import Callable, Sequence
+from dataclasses import dataclass
+
+import numpy as np
+import rclpy
+from action_msgs.msg import GoalStatus
+from control_msgs.action import FollowJointTrajectory
+from control_msgs.msg import JointTolerance
+from rcl_interfaces.msg import Log
+from rclpy.context import Context
+from rclpy.executors import SingleThreadedExecutor
+from rclpy.node import Node
+from rclpy.qos import DurabilityPolicy, QoSProfile
+from sensor_msgs.msg import JointState
+from std_msgs.msg import String
+
+from ur_glue_planner.errors import ClientError
+from ur_glue_planner.execution import ros_conversions as conv
+from ur_glue_planner.execution.action_client import ActionClient
+from ur_glue_planner.motion.kinematics import IkResult, Kinematics
+
+DEFAULT_CONTROLLER = 'scaled_joint_trajectory_controller'
+STATUS_NAMES = {GoalStatus.STATUS_SUCCEEDED: 'succeeded', GoalStatus.STATUS_ABORTED: 'aborted',
+                GoalStatus.STATUS_CANCELED: 'canceled'}
+
+
+@dataclass(frozen=True)
+class JointStateSample:
+    """One /joint_states message: stamp t [s], names, q [rad], qd [rad/s], effort [N m] (arrays (n,))."""
+
+    t: float
+    names: tuple[str, ...]
+    q: np.ndarray
+    qd: np.ndarray
+    effort: np.ndarray
+
+
+@dataclass(frozen=True)
+class GoalOutcome:
+    """How a FollowJointTrajectory goal ended: the control_msgs error code and string, and the goal status."""
+
+    error_code: int
+    error_string: str
+    status: str
+
+    @property
+    def succeeded(self) -> bool:
+        return self.status == 'succeeded' and self.error_code == FollowJointTrajectory.Result.SUCCESSFUL
+
+
+@dataclass(frozen=True)
+class Recording:
+    """Joint states sampled at a fixed rate: t (K,) [s] from the first sample, q, qd, effort (K, n)."""
+
+    t: np.ndarray
+    q: np.ndarray
+    qd: np.ndarray
+    effort: np.ndarray
+
+
+def _wait(condition: Callable[[], bool], timeout: float, what: str) -> None:
+    deadline = time.monotonic() + timeout
+    while not condition():
+        if time.monotonic() > deadline:
+            raise ClientError(f'{what} within {timeout:.1f} s')
+        time.sleep(0.001)
+
+
+class JointStateRecorder:
+    """Joint states received while recording, resampled at a fixed rate of message time."""
+
+    def __init__(self, rate: float, t0: float | None = None) -> None:
+        self.rate = rate
+        self.t0 = t0
+        self.samples: list[JointStateSample] = []
+
+    def start(self) -> float:
+        """Time of sample 0 [s]: the given t0, else the first message's stamp."""
+        return self.t0 if self.t0 is not None else self.samples[0].t
+
+    def span(self) -> float:
+        """Message time covered so far from the start [s]."""
+        return self.samples[-1].t - self.start() if self.samples else 0.0
+
+    def raw(self) -> Recording:
+        """Every message received, t relative to the start [s] (messages before the start included, t < 0)."""
+        if not self.samples:
+            raise ClientError('no joint states were received while recording')
+        t0 = self.start()
+        return Recording(np.array([s.t - t0 for s in self.samples]), np.array([s.q for s in self.samples]),
+                         np.array([s.qd for s in self.samples]), np.array([s.effort for s in self.samples]))
+
+    def resample(self, duration: float | None = None) -> Recording:
+        """Samples at start + k / rate, k < duration x rate (the seed's N = tf x rate): for each, the newest
+        message at or before that time."""
+        if not self.samples:
+            raise ClientError('no joint states were received while recording')
+        stamps = np.array([s.t for s in self.samples])
+        t0 = self.start()
+        covered = int(np.floor((stamps[-1] - t0) * self.rate + 1e-9)) + 1
+        if covered <= 0:
+            raise ClientError(f'no joint states at or after the recording start t0 = {t0:.3f} s '
+                              f'(newest stamp {stamps[-1]:.3f} s)')
+        count = covered if duration is None else min(covered, round(duration * self.rate))
+        grid = t0 + np.arange(count) / self.rate
+        picks = np.maximum(np.searchsorted(stamps, grid + 1e-9, side='right') - 1, 0)
+        chosen = [self.samples[i] for i in picks]
+        return Recording(grid - grid[0], np.array([s.q for s in chosen]), np.array([s.qd for s in chosen]),
+                         np.array([s.effort for s in chosen]))
+
+
+class TrajectoryGoal:
+    """An accepted goal: latest feedback, cancel() and wait()."""
+
+    def __init__(self, handle, on_feedback: Callable | None) -> None:
+        self._handle = handle
+        self._result_future = handle.get_result_async()
+        self.feedback = None
+        self._on_feedback = on_feedback
+
+    def _feedback(self, msg) -> None:
+        self.feedback = msg.feedback
+        if self._on_feedback is not None:
+            self._on_feedback(msg.feedback)
+
+    @property
+    def done(self) -> bool:
+        return self._result_future.done()
+
+    def cancel(self, timeout: float = 5.0) -> None:
+        """Ask the server to cancel; the robot stops and holds (the result then says canceled)."""
+        future = self._handle.cancel_goal_async()
+        _wait(future.done, timeout, 'no answer to the cancel request')
+
+    def wait(self, timeout: float | None = None) -> GoalOutcome:
+        """Block until the goal ends (timeout [s] of wall time, None = no limit) and return its outcome."""
+        _wait(self._result_future.done, float('inf') if timeout is None else timeout, 'the goal did not end')
+        r = self._result_future.result()
+        return GoalOutcome(r.result.error_code, r.result.error_string, STATUS_NAMES.get(r.status, str(r.status)))
+
+
+class URClient:
+    """Connection to a UR driver (or ur_sim): joint states, the trajectory topic and the FollowJointTrajectory action.
+
+    Args:
+        namespace: prefix of every interface name, e.g. '/ur10'.
+        controller_name: the trajectory controller, e.g. 'scaled_joint_trajectory_controller'.
+        timeout: how long to wait for the action server and the first joint state [s].
+        context: an initialised rclpy Context; a private one is created (and shut down by close()) when None.
+    """
+
+    def __init__(self, namespace: str = '', controller_name: str = DEFAULT_CONTROLLER, timeout: float = 10.0,
+                 context: Context | None = None, node_name: str = 'ur_client') -> None:
+        self._own_context = context is None
+        if context is None:
+            context = Context()
+            rclpy.init(context=context)
+        self.context = context
+        ns = namespace.strip('/')
+        prefix = f'/{ns}' if ns else ''
+        self._prefix = prefix
+        self.action_name = f'{prefix}/{controller_name}/follow_joint_trajectory'
+        self.node = Node(node_name, context=context)
+        self._latest: JointStateSample | None = None
+        self._state_lock = threading.Lock()
+        self._errors: list[tuple[float, str]] = []
+        self._urdf: str | None = None
+        self._recorders: list[JointStateRecorder] = []
+        self._history: deque[tuple[float, float]] = deque(maxlen=100)  # (wall, stamp) of recent joint states
+        self.node.create_subscription(JointState, f'{prefix}/joint_states', self._on_joint_state, QoSProfile(depth=10))
+        self.node.create_subscription(Log, '/rosout', self._on_log, QoSProfile(depth=50))
+        # Subscribed for the client's lifetime: destroying entities under a spinning executor races in rclpy.
+        latched = QoSProfile(depth=1, durability=DurabilityPolicy.TRANSIENT_LOCAL)
+        self.node.create_subscription(String, f'{prefix}/robot_description',
+                                      lambda m: setattr(self, '_urdf', m.data), latched)
+        self._topic = self.node.create_publisher(conv.JointTrajectory, f'{prefix}/{controller_name}/joint_trajectory',
+                                                 10)
+        self._action = ActionClient(self.node, FollowJointTrajectory, self.action_name)
+        self._executor = SingleThreadedExecutor(context=context)
+        self._executor.add_node(self.node)
+        self._thread = threading.Thread(target=self._executor.spin, daemon=True)
+        self._thread.start()
+        try:
+            _wait(self._action.server_is_ready, timeout, f'FollowJointTrajectory server {self.action_name} not found')
+            _wait(lambda: self._latest is not None, timeout, f'no joint states on {prefix}/joint_states')
+            _wait(lambda: self._topic.get_subscription_count() > 0, timeout,
+                  f'no subscriber on {prefix}/{controller_name}/joint_trajectory')
+        except ClientError:
+            self.close()
+            raise
+        self.joint_names = self._latest.names
+
+    # ---- state -----------------------------------------------------------------------------------
+    def _on_joint_state(self, msg: JointState) -> None:
+        sample = JointStateSample(msg.header.stamp.sec + msg.header.stamp.nanosec * 1e-9, tuple(msg.name),
+                                  np.array(msg.position), np.array(msg.velocity), np.array(msg.effort))
+        with self._state_lock:
+            self._latest = sample
+            wall = time.monotonic()
+            if not self._history or wall - self._history[-1][0] >= 0.01:  # ~1 s of history at any message rate
+                self._history.append((wall, sample.t))
+        for recorder in list(self._recorders):
+            recorder.samples.append(sample)
+
+    def _on_log(self, msg: Log) -> None:
+        if msg.level >= Log.ERROR:
+            self._errors.append((time.monotonic(), msg.msg))
+            del self._errors[:-20]
+
+    def joint_state(self) -> JointStateSample:
+        """The newest joint state received."""
+        with self._state_lock:
+            return self._latest
+
+    def start_recording(self, rate: float = 50.0, t0: float | None = None) -> JointStateRecorder:
+        """Record joint states from now on, resampled at `rate` [Hz] of message time (seed 2: 50 Hz).
+
+        Args:
+            rate: sampling rate [Hz].
+            t0: robot time [s] of sample 0 (e.g. a trajectory's start stamp); default: the first message.
+        """
+        recorder = JointStateRecorder(rate, t0)
+        self._recorders.append(recorder)
+        return recorder
+
+    def record(self, duration: float, rate: float = 50.0, timeout: float | None = None) -> Recording:
+        """Record for `duration` [s] of message (robot) time, sampled at `rate` [Hz]; blocks until done."""
+        recorder = self.start_recording(rate)
+        _wait(lambda: recorder.span() >= duration - 1.0 / rate, timeout or duration * 10 + 10.0,
+              'recording did not finish')
+        return self.stop_recording(recorder, duration)
+
+    def stop_recording(self, recorder: JointStateRecorder, duration: float | None = None,
+                       raw: bool = False) -> Recording:
+        """Stop `recorder` and return its samples at its rate (the first `duration` [s] when given), or every
+        message received (`raw`)."""
+        self._recorders.remove(recorder)
+        return recorder.raw() if raw else recorder.resample(duration)
+
+    def sleep(self, duration: float, timeout: float | None = None) -> None:
+        """Wait `duration` [s] of robot time (joint state stamps), which runs at any real-time factor."""
+        t_end = self.joint_state().t + duration
+        _wait(lambda: self.joint_state().t >= t_end, timeout or duration * 10 + 10.0, 'robot time did not advance')
+
+    # ---- kinematics ------------------------------------------------------------------------------
+    def robot_description(self, timeout: float = 10.0) -> str:
+        """The URDF on robot_description (transient local, as the UR driver and ur_sim publish it)."""
+        _wait(lambda: self._urdf is not None, timeout, f'no URDF on {self._prefix}/robot_description')
+        return self._urdf
+
+    def kinematics(self, frame: str = 'tool0', base_pose: np.ndarray | None = None) -> Kinematics:
+        """Pinocchio kinematics of `frame` from the robot's own URDF; base_pose (4, 4) places base_link in a world."""
+        return Kinematics(self.robot_description(), self.joint_names, frame, base_pose=base_pose)
+
+    def ik(self, target: np.ndarray, q0: Sequence[float] | None = None, frame: str = 'tool0',
+           weights: Sequence[float] | None = None, base_pose: np.ndarray | None = None) -> IkResult:
+        """Joint positions putting `frame` at `target` (4, 4) [m]; q0 defaults to the current joint state."""
+        kin = self.kinematics(frame, base_pose)
+        q_start = self.joint_state().q if q0 is None else np.asarray(q0, dtype=float)
+        return kin.ik(np.asarray(target, dtype=float), q_start, None if weights is None else np.asarray(weights))
+
+    # ---- commands --------------------------------------------------------------------------------
+    def publish_trajectory(self, times: Sequence[float], q: np.ndarray, qd: np.ndarray | None = None,
+                           qdd: np.ndarray | None = None, start_time: float = 0.0) -> None:
+        """Send a JointTrajectory on the topic (fire and forget).
+
+        Args:
+            times: (N,) time_from_start [s].
+            q, qd, qdd: (N, n) [rad, rad/s, rad/s^2]; qd and qdd may be None.
+            start_time: header.stamp in robot time [s] (see `now()`); 0 starts on arrival.
+        """
+        self._topic.publish(conv.joint_trajectory(self.joint_names, times, q, qd, qdd, start_time))
+
+    def now(self) -> float:
+        """Robot time [s]: the newest joint state's stamp (simulated time on ur_sim)."""
+        return self.joint_state().t
+
+    def time_rate(self) -> float:
+        """How fast robot time runs against the wall clock (1 on a real robot; higher on a fast simulation)."""
+        with self._state_lock:
+            history = list(self._history)
+        if len(history) < 2 or history[-1][0] - history[0][0] < 0.05:
+            return 1.0
+        (w0, t0), (w1, t1) = history[0], history[-1]
+        return max(1.0, (t1 - t0) / (w1 - w0))
+
+    def start_time(self, lead: float = 0.1, delivery: float = 0.3) -> float:
+        """A trajectory start stamp safely in the future [s of robot time]: `lead` [s] of robot time plus
+        `delivery` [s] of wall time for the goal to arrive, scaled by `time_rate()`."""
+        return self.now() + lead + delivery * self.time_rate()
+
+    def send_joint_configuration(self, q: Sequence[float], end_time: float, wait: bool = True,
+                                 **kwargs) -> GoalOutcome | TrajectoryGoal:
+        """Move to configuration q (n,) [rad], arriving at rest after end_time [s], through the action."""
+        q = np.asarray(q, dtype=float)[None, :]
+        return self.follow_trajectory(q, np.zeros_like(q), None, [end_time], wait=wait, **kwargs)
+
+    def follow_trajectory(self, q: np.ndarray, qd: np.ndarray | None, qdd: np.ndarray | None,
+                          times: Sequence[float], path_tolerance: Sequence[JointTolerance] | None = None,
+                          goal_tolerance: Sequence[JointTolerance] | None = None, goal_time_tolerance: float = 0.0,
+                          wait: bool = True, feedback_callback: Callable | None = None,
+                          timeout: float = 10.0, start_time: float = 0.0) -> GoalOutcome | TrajectoryGoal:
+        """Send a trajectory through FollowJointTrajectory.
+
+        Args:
+            q, qd, qdd: (N, n) positions [rad], velocities [rad/s] (or None), accelerations [rad/s^2] (or None).
+            times: (N,) time_from_start [s].
+            path_tolerance, goal_tolerance: control_msgs/JointTolerance lists (see `tolerances()`).
+            goal_time_tolerance: [s].
+            wait: block until the result (returns GoalOutcome), else return a TrajectoryGoal at once.
+            feedback_callback: called with each FollowJointTrajectory.Feedback.
+            timeout: for the goal response [s].
+            start_time: header.stamp in robot time [s] (see `now()`); 0 starts on arrival.
+
+        Raises:
+            ClientError: the goal was rejected (with the server's logged reason when it gave one) or not answered.
+        """
+        goal = FollowJointTrajectory.Goal()
+        goal.trajectory = conv.joint_trajectory(self.joint_names, times, np.atleast_2d(q), qd, qdd, start_time)
+        goal.path_tolerance = list(path_tolerance or [])
+        goal.goal_tolerance = list(goal_tolerance or [])
+        goal.goal_time_tolerance = conv.duration(goal_time_tolerance)
+        holder: list[TrajectoryGoal] = []
+        sent_at = time.monotonic()
+        future = self._action.send_goal_async(
+            goal, feedback_callback=lambda msg: holder and holder[0]._feedback(msg))
+        _wait(future.done, timeout, f'no answer to the goal from {self.action_name}')
+        handle = future.result()
+        if not handle.accepted:
+            raise ClientError(f'goal rejected by {self.action_name}: {self._rejection_reason(sent_at)}')
+        holder.append(TrajectoryGoal(handle, feedback_callback))
+        return holder[0].wait() if wait else holder[0]
+
+    def _rejection_reason(self, since: float) -> str:
+        # rclpy's goal response carries no reason; the server logs it (ur_sim and the UR driver both do).
+        deadline = time.monotonic() + 0.5
+        while time.monotonic() < deadline:
+            reasons = [m for t, m in self._errors if t >= since - 0.05]
+            if reasons:
+                return reasons[-1]
+            time.sleep(0.01)
+        return 'the server gave no reason on /rosout'
+
+    def tolerances(self, position: Sequence[float] | float, velocity: Sequence[float] | float = 0.0,
+                   acceleration: Sequence[float] | float = 0.0) -> list[JointTolerance]:
+        """JointTolerance per joint (>0 sets, 0 keeps the controller default, -1 disables the check)."""
+        n = len(self.joint_names)
+        pos, vel, acc = (np.broadcast_to(np.asarray(x, dtype=float), (n,)) for x in (position, velocity, acceleration))
+        return [JointTolerance(name=name, position=float(p), velocity=float(v), acceleration=float(a))
+                for name, p, v, a in zip(self.joint_names, pos, vel, acc)]
+
+    # ---- lifetime --------------------------------------------------------------------------------
+    def close(self) -> None:
+        """Stop spinning and release the node (and the private context)."""
+        self._executor.shutdown(timeout_sec=2.0)
+        self._thread.join(timeout=5.0)
+        self.node.destroy_node()
+        if self._own_context:
+            rclpy.try_shutdown(context=self.context)
+
+    def __enter__(self) -> URClient:
+        return self
+
+    def __exit__(self, *exc) -> None:
+        self.close()

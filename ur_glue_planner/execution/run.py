@@ -1,0 +1,102 @@
+"""Running a plan on a robot through FollowJointTrajectory: one goal per segment, with the job's tolerances.
+
+Shared by the planner node and the studio: progress from the goal feedback, the bead's joint states recorded,
+a message for every result code, and a stop request that cancels the active goal.
+"""
+from __future__ import annotations
+
+import threading
+import time
+from collections.abc import Callable
+
+from ur_glue_planner.execution.client import GoalOutcome, URClient
+from ur_glue_planner.motion.plan import GluePlan
+from ur_glue_planner.report.glue_report import Executed
+
+#: ``on_progress(segment name, fraction of its duration done, max joint tracking error [rad])``.
+Progress = Callable[[str, float, float], None]
+
+RECORD_RATE = 50.0  # [Hz] nominal; the report uses every message received (exact stamps)
+MESSAGES = {
+    0: 'bead completed',
+    -1: 'the goal was invalid or preempted by another command',
+    -2: 'the goal named joints the controller does not have',
+    -3: 'the trajectory started in the past: check that this node and the driver share a clock (use_sim_time)',
+    -4: 'the robot left the path tolerance (it could not follow the trajectory)',
+    -5: 'the robot did not reach the goal tolerance in time',
+}
+
+
+def describe(outcome: GoalOutcome) -> str:
+    """What a goal's result means, with its code, status and the server's text."""
+    return (f'{MESSAGES.get(outcome.error_code, "unknown error code")} (error_code {outcome.error_code}, '
+            f'status {outcome.status}): {outcome.error_string}')
+
+
+class Interrupted(Exception):
+    """SIGINT or SIGTERM arrived while a goal was running; the goal has been cancelled."""
+
+
+def _progress(name: str, t0: float, duration: float, log: Callable[[str], None], on_progress: Progress | None):
+    last = [0.0]
+
+    def show(feedback) -> None:
+        t = feedback.header.stamp.sec + feedback.header.stamp.nanosec * 1e-9 - t0
+        error = max((abs(e) for e in feedback.error.positions), default=0.0)
+        fraction = min(max(t / duration, 0.0), 1.0)
+        if on_progress is not None:
+            on_progress(name, fraction, error)
+        now = time.monotonic()
+        if now - last[0] < 0.5:
+            return
+        last[0] = now
+        log(f'  [{name}] {100.0 * fraction:5.1f} % of {duration:.1f} s, max joint tracking error '
+            f'{error * 1e3:.3f} mrad')
+    return show
+
+
+def _print(text: str) -> None:
+    print(text, flush=True)
+
+
+def execute(ur: URClient, plan: GluePlan, stop: threading.Event, log: Callable[[str], None] = _print,
+            on_progress: Progress | None = None) -> tuple[GoalOutcome, Executed | None]:
+    """Run the plan's segments in order; returns the last outcome and the bead's recorded joint states.
+
+    Args:
+        ur: Connected client.
+        plan: The plan (its approach starts where the robot is).
+        stop: Set to cancel: the active goal is cancelled and Interrupted raised.
+        log: Receives the progress and result lines.
+        on_progress: Called on every feedback message.
+    """
+    job = plan.job
+    path_tol = ur.tolerances(job.tolerances.path_position)
+    goal_tol = ur.tolerances(job.tolerances.goal_position)
+    recorder, outcome, run = None, None, None
+    for seg in plan.segments():
+        t0 = ur.start_time()
+        if seg.name == 'bead':
+            recorder = ur.start_recording(RECORD_RATE, t0)
+        log(f'{seg.name}: {len(seg.times)} points, {seg.duration:.2f} s')
+        feedback = _progress(seg.name, t0, seg.duration, log, on_progress)
+        goal = ur.follow_trajectory(seg.q, seg.qd, seg.qdd, seg.times, path_tolerance=path_tol,
+                                    goal_tolerance=goal_tol, goal_time_tolerance=job.tolerances.goal_time,
+                                    wait=False, start_time=t0, feedback_callback=feedback)
+        while not goal.done:
+            if stop.is_set():
+                log(f'\ninterrupted: cancelling the {seg.name} goal')
+                goal.cancel()
+                goal.wait(timeout=10.0)
+                raise Interrupted(seg.name)
+            time.sleep(0.02)
+        outcome = goal.wait()
+        if recorder is not None:
+            ur.sleep(0.2)
+            rec = ur.stop_recording(recorder, raw=True)
+            recorder = None
+            run = Executed(rec.t, rec.q, rec.qd)
+        if not outcome.succeeded:
+            log(f'{seg.name} failed: {describe(outcome)}')
+            return outcome, run
+    return outcome, run

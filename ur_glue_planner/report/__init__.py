@@ -1,0 +1,1 @@
+"""Report: bead metrics, the seed's figures, a rendered picture and summary.json."""

@@ -1,0 +1,155 @@
+"""The studio's ROS side: the live robot (/joint_states, /robot_description) and running a plan on it.
+
+Running reuses :func:`ur_glue_planner.execution.run.execute`, the planner node's own execution (one
+FollowJointTrajectory goal per segment with the job's tolerances, progress from the feedback, a message for every
+result code; a stop request cancels the active goal).
+"""
+from __future__ import annotations
+
+import threading
+import time
+from collections.abc import Callable
+from dataclasses import dataclass
+
+import numpy as np
+import rclpy
+from rclpy.context import Context
+from rclpy.executors import SingleThreadedExecutor
+from rclpy.node import Node
+from rclpy.qos import DurabilityPolicy, QoSProfile
+from sensor_msgs.msg import JointState
+from std_msgs.msg import String
+
+from ur_glue_planner.errors import ClientError, PlanningError
+from ur_glue_planner.execution.client import URClient
+from ur_glue_planner.execution.run import Interrupted, describe, execute
+from ur_glue_planner.job import GlueJob
+from ur_glue_planner.motion.plan import GluePlan, plan_job
+
+
+@dataclass(frozen=True)
+class LiveState:
+    """Newest joint state of the live robot: stamp [s], names, positions [rad], and the wall time it arrived."""
+
+    stamp: float
+    names: tuple[str, ...]
+    q: np.ndarray
+    received: float
+
+
+@dataclass(frozen=True)
+class RunResult:
+    """How a run ended: succeeded, the error code (None if it never reached the robot), the message shown."""
+
+    succeeded: bool
+    error_code: int | None
+    message: str
+
+
+class LiveRobot:
+    """Subscriptions to a robot's joint states and robot description, spun in a background thread.
+
+    Args:
+        namespace: Prefix of the topics, e.g. '' or '/ur10'.
+        context: An initialised rclpy context (a private one is made and shut down by close() if None).
+    """
+
+    def __init__(self, namespace: str = '', context: Context | None = None) -> None:
+        self._own_context = context is None
+        if context is None:
+            context = Context()
+            rclpy.init(context=context)
+        self.context = context
+        ns = namespace.strip('/')
+        self.prefix = f'/{ns}' if ns else ''
+        self.node = Node('ur_glue_studio', context=context)
+        self._lock = threading.Lock()
+        self._state: LiveState | None = None
+        self._urdf: str | None = None
+        self.node.create_subscription(JointState, f'{self.prefix}/joint_states', self._on_joint_state,
+                                      QoSProfile(depth=10))
+        latched = QoSProfile(depth=1, durability=DurabilityPolicy.TRANSIENT_LOCAL)
+        self.node.create_subscription(String, f'{self.prefix}/robot_description', self._on_description, latched)
+        self._executor = SingleThreadedExecutor(context=context)
+        self._executor.add_node(self.node)
+        self._thread = threading.Thread(target=self._executor.spin, daemon=True)
+        self._thread.start()
+        self._run_thread: threading.Thread | None = None
+        self._stop = threading.Event()
+
+    def _on_joint_state(self, msg: JointState) -> None:
+        state = LiveState(msg.header.stamp.sec + msg.header.stamp.nanosec * 1e-9, tuple(msg.name),
+                          np.array(msg.position), time.monotonic())
+        with self._lock:
+            self._state = state
+
+    def _on_description(self, msg: String) -> None:
+        with self._lock:
+            self._urdf = msg.data
+
+    def state(self) -> LiveState | None:
+        """The newest joint state, or None before the first."""
+        with self._lock:
+            return self._state
+
+    def urdf(self) -> str | None:
+        """The robot's URDF, or None before it arrived."""
+        with self._lock:
+            return self._urdf
+
+    # ---- running a plan --------------------------------------------------------------------------------------
+    @property
+    def running(self) -> bool:
+        return self._run_thread is not None and self._run_thread.is_alive()
+
+    def start_run(self, job: GlueJob, namespace: str, controller_name: str, log: Callable[[str], None],
+                  on_progress: Callable[[str, float, float], None], on_done: Callable[[RunResult, GluePlan | None],
+                                                                                    None],
+                  timeout: float = 10.0) -> None:
+        """Plan ``job`` from the robot's current state and execute it in a background thread.
+
+        ``on_done`` receives the result and the plan executed (None if planning or connecting failed).
+        """
+        if self.running:
+            raise RuntimeError('a run is already in progress')
+        self._stop.clear()
+
+        def work() -> None:
+            plan = None
+            try:
+                ur = URClient(namespace=namespace, controller_name=controller_name, timeout=timeout,
+                              context=self.context, node_name='ur_glue_studio_client')
+            except ClientError as exc:
+                on_done(RunResult(False, None, f'cannot connect: {exc}'), None)
+                return
+            try:
+                plan = plan_job(job, ur.joint_state().q)
+                log(f'planned from the current state: total {plan.summary.total_duration:.2f} s')
+                outcome, _ = execute(ur, plan, self._stop, log=log, on_progress=on_progress)
+                text = describe(outcome)
+                on_done(RunResult(outcome.succeeded, outcome.error_code, text), plan)
+            except Interrupted as exc:
+                on_done(RunResult(False, None, f'stopped: the {exc} goal was cancelled, the robot holds'), plan)
+            except (PlanningError, ClientError) as exc:
+                on_done(RunResult(False, None, str(exc)), plan)
+            finally:
+                ur.close()
+
+        self._run_thread = threading.Thread(target=work, daemon=True, name='ur_glue_studio_run')
+        self._run_thread.start()
+
+    def stop_run(self, timeout: float = 15.0) -> None:
+        """Cancel the active goal (the robot stops and holds) and wait for the run to end."""
+        self._stop.set()
+        if self._run_thread is not None:
+            self._run_thread.join(timeout)
+
+    def close(self) -> None:
+        """Stop a run, stop spinning, release the node (and the private context)."""
+        if self.running:
+            self.stop_run()
+        self._executor.shutdown(timeout_sec=2.0)
+        self._thread.join(timeout=5.0)
+        self.node.destroy_node()
+        if self._own_context:
+            rclpy.try_shutdown(context=self.context)
