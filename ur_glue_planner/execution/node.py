@@ -8,17 +8,15 @@ Exit codes: 0 success, 2 invalid job, 3 no server or joint states, 4 planning fa
 """
 from __future__ import annotations
 
-import signal
 import sys
 import threading
 from pathlib import Path
 
 import rclpy
-from rclpy.node import Node
-from rclpy.signals import SignalHandlerOptions
 
 from ur_glue_planner.errors import ClientError, JobError, PlanningError
 from ur_glue_planner.execution.client import URClient
+from ur_glue_planner.execution.entry import start_ros
 from ur_glue_planner.execution.run import Interrupted, execute
 from ur_glue_planner.job import default_job_path, load_job
 from ur_glue_planner.motion.plan import plan_job
@@ -71,14 +69,7 @@ def run_job(params: dict, stop: threading.Event, context=None) -> int:
 
 def main(argv: list[str] | None = None) -> int:
     """Entry point of `ur_glue_planner` (and `ros2 run ur_sim_driver ur_glue_planner`)."""
-    rclpy.init(args=argv, signal_handler_options=SignalHandlerOptions.NO)
-    stop = threading.Event()
-    for sig in (signal.SIGINT, signal.SIGTERM):
-        signal.signal(sig, lambda *_: stop.set())
-    node = Node('ur_glue_planner', allow_undeclared_parameters=True,
-                automatically_declare_parameters_from_overrides=True)
-    params = {name: p.value for name, p in node._parameters.items()}
-    node.destroy_node()
+    params, stop = start_ros('ur_glue_planner', argv)
     try:
         return run_job(params, stop, context=rclpy.get_default_context())
     except KeyboardInterrupt:

@@ -7,15 +7,12 @@ Ctrl-C / SIGTERM (a running goal is cancelled first). Exit codes: 0, 2 invalid p
 """
 from __future__ import annotations
 
-import signal
 import sys
-import threading
 
 import rclpy
-from rclpy.node import Node
-from rclpy.signals import SignalHandlerOptions
 
 from ur_glue_planner.errors import JobError
+from ur_glue_planner.execution.entry import start_ros
 from ur_glue_planner.studio.job_file import read_job
 from ur_glue_planner.studio.ros_link import LiveRobot
 
@@ -41,14 +38,7 @@ def parse_params(raw: dict) -> dict:
 
 def main(argv: list[str] | None = None) -> int:
     """Entry point of `ur_glue_studio` (and `ros2 run ur_sim_driver ur_glue_studio`)."""
-    rclpy.init(args=argv, signal_handler_options=SignalHandlerOptions.NO)
-    stop = threading.Event()
-    for sig in (signal.SIGINT, signal.SIGTERM):
-        signal.signal(sig, lambda *_: stop.set())
-    node = Node('ur_glue_studio_params', allow_undeclared_parameters=True,
-                automatically_declare_parameters_from_overrides=True)
-    raw = {name: p.value for name, p in node._parameters.items()}
-    node.destroy_node()
+    raw, stop = start_ros('ur_glue_studio_params', argv)
     try:
         params = parse_params(raw)
         job_path = params['job'] or None
