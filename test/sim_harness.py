@@ -200,7 +200,8 @@ def running_sim(**params) -> Iterator[SimHarness]:
         sim = UrSimNode(context=ctx, parameter_overrides=[_param(k, v) for k, v in params.items()])
         client = Node('test_client', context=ctx)
         executor = MultiThreadedExecutor(num_threads=4, context=ctx)
-        executor.add_node(sim)
+        for node in sim.nodes():
+            executor.add_node(node)
         executor.add_node(client)
         thread = threading.Thread(target=executor.spin, daemon=True)
         thread.start()

@@ -7,7 +7,7 @@ publish every 2 ms. The two processes exchange the small messages below over a p
 
 * gateway -> simulation: :class:`Start` (a validated trajectory, in the sender's joint order), :class:`Cancel`;
 * simulation -> gateway: :class:`Ended` (a goal's outcome), :class:`Canceled` (the answer to a Cancel),
-  :class:`Feedback`.
+  :class:`Feedback`, :class:`Gate` (whether the controller may take commands now).
 
 The simulated time is shared through a double in shared memory, written by the simulation every cycle and read
 by the gateway's validation (stamps in the past, stamps far in the future).
@@ -106,6 +106,14 @@ class Feedback:
     desired: tuple[np.ndarray, np.ndarray, np.ndarray]
     actual: tuple[np.ndarray, np.ndarray]
     error: tuple[np.ndarray, np.ndarray]
+
+
+@dataclass(frozen=True)
+class Gate:
+    """The robot cannot move (`reason` names its state) or can again (None): goals and messages are refused
+    while a reason is set, as the driver's controller_stopper leaves the controller inactive."""
+
+    reason: str | None
 
 
 STOP = 'stop'  # sent last: the gateway ends its goals and exits

@@ -18,21 +18,25 @@ import time
 import numpy as np
 import rclpy
 from control_msgs.msg import JointTrajectoryControllerState, SpeedScalingFactor
-from geometry_msgs.msg import PoseStamped
 from rclpy.callback_groups import MutuallyExclusiveCallbackGroup
 from rclpy.executors import ExternalShutdownException, MultiThreadedExecutor
 from rclpy.node import Node
 from rclpy.qos import DurabilityPolicy, QoSProfile
 from rclpy.signals import SignalHandlerOptions
 from rosgraph_msgs.msg import Clock
-from sensor_msgs.msg import JointState
-from std_msgs.msg import Float64, String
+from std_msgs.msg import String
 
 from ur_sim_driver import conversions as conv
+from ur_sim_driver import result_codes
+from ur_sim_driver.controllers.base import Component, Cycle, Host
+from ur_sim_driver.controllers.joint_state_broadcaster import JointStateBroadcaster
+from ur_sim_driver.controllers.speed_scaling_state_broadcaster import SpeedScalingStateBroadcaster
+from ur_sim_driver.controllers.tcp_pose_broadcaster import TcpPoseBroadcaster
 from ur_sim_driver.errors import TrajectoryError, UrSimError
-from ur_sim_driver.gateway_link import Cancel, Canceled, Ended, Feedback, GatewayConfig, GatewayLink, Start
+from ur_sim_driver.gateway_link import Cancel, Canceled, Ended, Feedback, Gate, GatewayConfig, GatewayLink, Start
 from ur_sim_driver.jtc import Outcome, TrajectoryController
 from ur_sim_driver.memory import use_mmap_for_large_blocks
+from ur_sim_driver.robot_state import RobotState
 from ur_sim_driver.sim_config import SimConfig, sim_config_from_params
 from ur_sim_driver.simulator import Simulator
 from ur_sim_driver.tolerances import default_tolerances
@@ -74,13 +78,12 @@ class UrSimNode(Node):
         self._stop = threading.Event()
         self._feedback_every = max(1, round(self.sim.control_rate / self.cfg.action_monitor_rate))
         self._cycle = 0
+        self.robot = RobotState(powered_off=self.cfg.start_powered_off)
+        self._refusal = self.robot.motion_refusal()
 
         p = self.cfg.prefixed
         ctrl = self.cfg.controller_name
-        self._pub_js = self.create_publisher(JointState, p('joint_states'), 10)
         self._pub_state = self.create_publisher(JointTrajectoryControllerState, p(f'{ctrl}/controller_state'), 10)
-        self._pub_scaling = self.create_publisher(Float64, p('speed_scaling_state_broadcaster/speed_scaling'), 10)
-        self._pub_tcp = self.create_publisher(PoseStamped, p('tcp_pose_broadcaster/pose'), 10)
         self._pub_clock = self.create_publisher(Clock, '/clock', 10)
         latched = QoSProfile(depth=1, durability=DurabilityPolicy.TRANSIENT_LOCAL)
         self._pub_description = self.create_publisher(String, p('robot_description'), latched)
@@ -95,6 +98,16 @@ class UrSimNode(Node):
             allow_partial=self.cfg.allow_partial_joints_goal,
             allow_nonzero_end_velocity=self.cfg.allow_nonzero_velocity_at_trajectory_end,
             defaults=self._defaults), self._on_gateway)
+        if self._refusal is not None:
+            self.gateway.send(Gate(self._refusal))
+
+        # The driver's controllers and nodes besides the trajectory controller, one module each.
+        self.host = Host(self.cfg, self.sim, self._lock, self.robot, self.context)
+        self.components: list[Component] = [
+            JointStateBroadcaster(), SpeedScalingStateBroadcaster(), TcpPoseBroadcaster()]
+        for component in self.components:
+            component.configure(self.host)
+            component.activate()
 
         self._init_messages()
         self._thread = threading.Thread(target=self._run, name='ur_sim_loop', daemon=True)
@@ -114,14 +127,14 @@ class UrSimNode(Node):
                 self.get_logger().warning(f"parameter '{name}' is not used by ur_sim; valid names: "
                                           f"{', '.join(sorted(known - {'constraints'}))}, constraints.*")
 
+    def nodes(self) -> list[Node]:
+        """This node and every component's: an executor spinning ur_sim must spin all of them."""
+        return [self, *(c.node for c in self.components if c.node is not None)]
+
     def _init_messages(self) -> None:
         joints = list(self.sim.joint_names)
-        self._js = JointState(name=joints)
         self._state_msg = JointTrajectoryControllerState(joint_names=joints)
-        self._scaling_msg = Float64()
         self._clock_msg = Clock()
-        self._tcp_msg = PoseStamped()
-        self._tcp_msg.header.frame_id = f'{self.cfg.tf_prefix}base'
 
     # ---- ROS callbacks (executor threads) ----------------------------------------------------------
     def _on_gateway(self, message: object) -> None:
@@ -134,9 +147,16 @@ class UrSimNode(Node):
                 self.get_logger().error(f'trajectory not started: {exc}')
                 return
             with self._lock:
-                state = self.sim.state()
-                preempted = self.jtc.start(points, state.t, state.q, state.qd, token=message.token,
-                                           tolerances=message.tolerances)
+                refusal = self.robot.motion_refusal()
+                if refusal is None:
+                    state = self.sim.state()
+                    preempted = self.jtc.start(points, state.t, state.q, state.qd, token=message.token,
+                                               tolerances=message.tolerances)
+            if refusal is not None:  # the state changed while the gateway accepted it
+                if message.token is not None:
+                    self._finish(Outcome(message.token, result_codes.INVALID_GOAL,
+                                         f'the controller is not running: {refusal}'))
+                return
             if preempted is not None:
                 self._finish(preempted)
         elif isinstance(message, Cancel):
@@ -210,49 +230,59 @@ class UrSimNode(Node):
                 viewer.close()
 
     def step_once(self) -> None:
-        """One control cycle: measure, update the JTC, apply torques, step physics, publish."""
+        """One control cycle: robot state, JTC update, torques, physics step, then the components publish."""
         with self._lock:
             state = self.sim.state()
+            stopped = self._controller_stopper(state)
             sample, outcome = self.jtc.update(state.t, self.sim.control_dt, state.q, state.qd)
+            tcp_position, tcp_orientation = self.sim.tcp_pose()
             tau = self.sim.advance(state, sample, self.jtc.stop)
             token = self.jtc.active_token
             feedback_due = token is not None and self._cycle % self._feedback_every == 0
             robot_factor, total_factor = self.jtc.scaling.factor, self.jtc.scaling.total
         self.gateway.set_sim_time(self.sim.time)
-        self._publish(state, sample, tau, robot_factor, total_factor)
+        cycle = Cycle(self._cycle, state.t, conv.sec_to_time(state.t), state, sample, tau, robot_factor,
+                      total_factor, tcp_position, tcp_orientation)
+        for component in self.components:
+            if component.active:
+                component.update(cycle)
+        self._publish(cycle)
         if feedback_due:
             self._publish_feedback(token, state, sample)
-        if outcome is not None:
-            self._finish(outcome)
+        for ended in (stopped, outcome):
+            if ended is not None:
+                self._finish(ended)
         self._cycle += 1
 
-    def _publish(self, state, sample, tau, robot_factor: float, total_factor: float) -> None:
-        stamp = conv.sec_to_time(state.t)
-        js = self._js
-        js.header.stamp = stamp
-        js.position = conv.float_array(state.q)
-        js.velocity = conv.float_array(state.qd)
-        js.effort = conv.float_array(state.effort)
-        self._pub_js.publish(js)
+    def _controller_stopper(self, state) -> Outcome | None:
+        """Under the lock: advance the robot state; when the robot can no longer move, end the active goal and
+        hold, as the driver's controller_stopper deactivates the controllers; tell the gateway either way."""
+        self.robot.update(state.t)
+        refusal = self.robot.motion_refusal()
+        if refusal == self._refusal:
+            return None
+        self._refusal = refusal
+        self.gateway.send(Gate(refusal))
+        if refusal is None:
+            return None
+        token = self.jtc.active_token
+        self.jtc.hold(state.q)
+        if token is None:
+            return None
+        return Outcome(token, result_codes.INVALID_GOAL, f'the controller was deactivated: {refusal}')
+
+    def _publish(self, cycle: Cycle) -> None:
+        state, sample = cycle.state, cycle.reference
         st = self._state_msg
-        st.header.stamp = stamp
+        st.header.stamp = cycle.stamp
         conv.fill_point(st.reference, sample.positions, sample.velocities, sample.accelerations)
         conv.fill_point(st.feedback, state.q, state.qd)
         conv.fill_point(st.error, sample.positions - state.q, sample.velocities - state.qd)
-        conv.fill_point(st.output, sample.positions, sample.velocities, effort=tau)
+        conv.fill_point(st.output, sample.positions, sample.velocities, effort=cycle.effort)
         # The controller reports the factor it advances trajectory time by; the broadcaster the robot's own.
-        st.speed_scaling_factor = total_factor
+        st.speed_scaling_factor = cycle.total_factor
         self._pub_state.publish(st)
-        self._scaling_msg.data = robot_factor * 100.0
-        self._pub_scaling.publish(self._scaling_msg)
-        p, q = self.sim.tcp_pose()
-        pose = self._tcp_msg
-        pose.header.stamp = stamp
-        pose.pose.position.x, pose.pose.position.y, pose.pose.position.z = p.tolist()
-        o = pose.pose.orientation
-        o.x, o.y, o.z, o.w = q.tolist()
-        self._pub_tcp.publish(pose)
-        self._clock_msg.clock = stamp
+        self._clock_msg.clock = cycle.stamp
         self._pub_clock.publish(self._clock_msg)
 
     def _publish_feedback(self, token, state, sample) -> None:
@@ -265,6 +295,11 @@ class UrSimNode(Node):
         if self._thread.is_alive():
             self._thread.join(timeout=5.0)
         self.gateway.close()
+
+    def destroy_node(self) -> None:
+        for component in self.components:
+            component.destroy()
+        super().destroy_node()
 
 
 def main(argv: list[str] | None = None) -> int:
@@ -283,7 +318,8 @@ def main(argv: list[str] | None = None) -> int:
     code = 0
     try:
         node = UrSimNode()
-        executor.add_node(node)
+        for n in node.nodes():
+            executor.add_node(n)
         while not stop.is_set() and rclpy.ok():
             executor.spin_once(timeout_sec=0.1)
     except (KeyboardInterrupt, ExternalShutdownException):

@@ -37,6 +37,7 @@ class SimConfig:
     allow_partial_joints_goal: bool = False
     allow_nonzero_velocity_at_trajectory_end: bool = False
     strict_limit_checks: bool = False
+    start_powered_off: bool = False
     update_rate: float = 0.0
     physics_substeps: int = 0
     speed_scaling_initial_factor: float = 1.0
@@ -126,6 +127,7 @@ def sim_config_from_params(params: Mapping[str, Any]) -> SimConfig:
         allow_nonzero_velocity_at_trajectory_end=bool(
             get('allow_nonzero_velocity_at_trajectory_end', d.allow_nonzero_velocity_at_trajectory_end)),
         strict_limit_checks=bool(get('strict_limit_checks', d.strict_limit_checks)),
+        start_powered_off=bool(get('start_powered_off', d.start_powered_off)),
         update_rate=update_rate,
         physics_substeps=substeps,
         speed_scaling_initial_factor=_number('speed_scaling_initial_factor',

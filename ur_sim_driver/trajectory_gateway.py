@@ -33,7 +33,7 @@ from ur_sim_driver import result_codes
 from ur_sim_driver.cdr import parse_joint_trajectory
 from ur_sim_driver.command_arrays import CommandArrays, from_points
 from ur_sim_driver.errors import TrajectoryError
-from ur_sim_driver.gateway_link import STOP, Cancel, Canceled, Ended, Feedback, GatewayConfig, Start
+from ur_sim_driver.gateway_link import STOP, Cancel, Canceled, Ended, Feedback, Gate, GatewayConfig, Start
 from ur_sim_driver.memory import release_memory, use_mmap_for_large_blocks
 from ur_sim_driver.tolerances import resolve_tolerances
 from ur_sim_driver.validation import validate_trajectory
@@ -68,6 +68,7 @@ class TrajectoryGateway:
         self._handles: dict[bytes, object] = {}
         self._pending: dict[int, CommandArrays] = {}  # converted goals between goal callback and acceptance
         self.stopped = threading.Event()
+        self.refusal: str | None = None  # why the robot cannot move now (from the simulation), or None
         ns = cfg.namespace.strip('/')
         base = f'/{ns}/{cfg.node_name}' if ns else f'/{cfg.node_name}'
         ordered = MutuallyExclusiveCallbackGroup()
@@ -82,6 +83,10 @@ class TrajectoryGateway:
 
     # ---- validation --------------------------------------------------------------------------------
     def _validate(self, cmd: CommandArrays, what: str) -> str | None:
+        refusal = self.refusal
+        if refusal is not None:
+            # Upstream's JTC rejects everything while inactive; the controller_stopper deactivated it.
+            return f'the controller is not running: {refusal}'
         cfg = self.cfg
         (now,) = struct.unpack_from('d', self._sim_time, 0)
         strict = cfg.strict_limits
@@ -195,6 +200,9 @@ class TrajectoryGateway:
         self.stopped.set()
 
     def _dispatch(self, message: object) -> None:
+        if isinstance(message, Gate):
+            self.refusal = message.reason
+            return
         with self._lock:
             waiter = self._waiters.get(message.token)
             handle = self._handles.get(message.token)

@@ -1,0 +1,134 @@
+"""The lifecycle every emulated controller and driver node of ur_sim follows: ros2_control's, reduced.
+
+In the real driver each controller is a node named after itself, loaded by the controller manager, which
+configures it, activates it and then calls ``update`` from its control loop. ur_sim mirrors that: a
+:class:`Component` creates its ROS interfaces on its own rclpy node in :meth:`Component.configure`, is switched
+with :meth:`activate` / :meth:`deactivate`, and :meth:`update` is called from the simulation loop once per
+control cycle while it is active, with a :class:`Cycle` (what was measured and commanded in that cycle).
+
+``update`` runs in the simulation thread outside the simulation lock: it reads the Cycle and publishes. A
+component that changes the simulation (IO, payload, robot state) does so from its service callbacks under
+``host.lock``, and keeps that short: the loop needs the lock every cycle.
+"""
+from __future__ import annotations
+
+import threading
+from dataclasses import dataclass
+from typing import TYPE_CHECKING
+
+import numpy as np
+from builtin_interfaces.msg import Time
+from rclpy.node import Node
+
+from ur_sim_driver.physics import ArmState
+from ur_sim_driver.trajectory import TrajectorySample
+
+if TYPE_CHECKING:  # imported for annotations only: no import cycle with the node
+    from ur_sim_driver.robot_state import RobotState
+    from ur_sim_driver.sim_config import SimConfig
+    from ur_sim_driver.simulator import Simulator
+
+
+@dataclass(frozen=True, eq=False)
+class Cycle:
+    """One control cycle as the controllers see it.
+
+    Attributes:
+        index: cycle counter since start.
+        t: simulated time at the start of the cycle [s] (the time of `state`).
+        stamp: `t` as a builtin_interfaces/Time (shared: do not modify).
+        state: joint state measured at the start of the cycle.
+        reference: the trajectory controller's reference for this cycle.
+        effort: (n,) torques applied during the cycle [N m].
+        robot_factor: the robot's own speed scaling in [0, 1] (speed slider x its slowdowns).
+        total_factor: the factor the scaled JTC advanced its trajectory time by.
+        tcp_position: (3,) tool0 in the base frame [m], at `t`.
+        tcp_orientation: (4,) tool0 orientation in the base frame, quaternion (x, y, z, w).
+    """
+
+    index: int
+    t: float
+    stamp: Time
+    state: ArmState
+    reference: TrajectorySample
+    effort: np.ndarray
+    robot_factor: float
+    total_factor: float
+    tcp_position: np.ndarray
+    tcp_orientation: np.ndarray
+
+
+@dataclass
+class Host:
+    """What ur_sim gives every component at configure time.
+
+    Attributes:
+        cfg: the node's validated configuration.
+        sim: the simulated arm (touch it only under `lock`).
+        lock: the simulation lock.
+        robot: the robot's modes and program state (under `lock`).
+        context: the rclpy context every component node lives in.
+    """
+
+    cfg: SimConfig
+    sim: Simulator
+    lock: threading.Lock
+    robot: RobotState
+    context: object
+
+    def create_node(self, name: str) -> Node:
+        """A node named `name` in ur_sim's namespace, as ros2_control gives each controller one."""
+        ns = self.cfg.namespace.strip('/')
+        return Node(name, namespace=f'/{ns}' if ns else '/', context=self.context,
+                    start_parameter_services=False)
+
+
+class Component:
+    """Base class of an emulated controller or driver node.
+
+    Subclasses set :attr:`name` (the controller's name, e.g. ``io_and_status_controller``) and
+    :attr:`type_name` (its plugin type, e.g. ``ur_controllers/GPIOController``) and override the hooks.
+    """
+
+    name: str = ''
+    type_name: str = ''
+
+    def __init__(self) -> None:
+        self.node: Node | None = None
+        self.host: Host | None = None
+        self.active = False
+
+    def configure(self, host: Host) -> None:
+        """Create the node and the ROS interfaces (they exist while inactive, as with a loaded controller)."""
+        self.host = host
+        self.node = host.create_node(self.name)
+        self.on_configure(host, self.node)
+
+    def activate(self) -> None:
+        """Start updating (and publishing)."""
+        self.on_activate()
+        self.active = True
+
+    def deactivate(self) -> None:
+        """Stop updating."""
+        self.active = False
+        self.on_deactivate()
+
+    def destroy(self) -> None:
+        """Release the node (ur_sim is shutting down)."""
+        if self.node is not None:
+            self.node.destroy_node()
+            self.node = None
+
+    # ---- hooks ---------------------------------------------------------------------------------
+    def on_configure(self, host: Host, node: Node) -> None:
+        """Create publishers, services and subscriptions on `node`."""
+
+    def on_activate(self) -> None:
+        """Called before the first update after a switch to active."""
+
+    def on_deactivate(self) -> None:
+        """Called after the last update."""
+
+    def update(self, cycle: Cycle) -> None:
+        """One control cycle (simulation thread, outside the lock)."""

@@ -1,0 +1,22 @@
+"""speed_scaling_state_broadcaster: the robot's speed scaling in percent, every control cycle."""
+from __future__ import annotations
+
+from rclpy.node import Node
+from std_msgs.msg import Float64
+
+from ur_sim_driver.controllers.base import Component, Cycle, Host
+
+
+class SpeedScalingStateBroadcaster(Component):
+    """``~/speed_scaling`` (std_msgs/Float64): the robot's own factor x 100 (speed slider x its slowdowns)."""
+
+    name = 'speed_scaling_state_broadcaster'
+    type_name = 'ur_controllers/SpeedScalingStateBroadcaster'
+
+    def on_configure(self, host: Host, node: Node) -> None:
+        self._pub = node.create_publisher(Float64, host.cfg.prefixed(f'{self.name}/speed_scaling'), 10)
+        self._msg = Float64()
+
+    def update(self, cycle: Cycle) -> None:
+        self._msg.data = cycle.robot_factor * 100.0
+        self._pub.publish(self._msg)
