@@ -102,7 +102,7 @@ class UrSimNode(Node):
             self.gateway.send(Gate(self._refusal))
 
         # The driver's controllers and nodes besides the trajectory controller, one module each.
-        self.host = Host(self.cfg, self.sim, self._lock, self.robot, self.context)
+        self.host = Host(self.cfg, self.sim, self._lock, self.robot, self.jtc.scaling, self.context)
         self.components: list[Component] = [
             JointStateBroadcaster(), SpeedScalingStateBroadcaster(), TcpPoseBroadcaster()]
         for component in self.components:

@@ -27,6 +27,7 @@ if TYPE_CHECKING:  # imported for annotations only: no import cycle with the nod
     from ur_sim_driver.robot_state import RobotState
     from ur_sim_driver.sim_config import SimConfig
     from ur_sim_driver.simulator import Simulator
+    from ur_sim_driver.speed_scaling import RobotSpeedScaling
 
 
 @dataclass(frozen=True, eq=False)
@@ -67,6 +68,7 @@ class Host:
         sim: the simulated arm (touch it only under `lock`).
         lock: the simulation lock.
         robot: the robot's modes and program state (under `lock`).
+        speed_scaling: the robot's own speed scaling (under `lock`).
         context: the rclpy context every component node lives in.
     """
 
@@ -74,6 +76,7 @@ class Host:
     sim: Simulator
     lock: threading.Lock
     robot: RobotState
+    speed_scaling: RobotSpeedScaling
     context: object
 
     def create_node(self, name: str) -> Node:
