@@ -32,6 +32,7 @@ from ur_sim_driver.controllers.base import Component, Cycle, Host
 from ur_sim_driver.controllers.joint_state_broadcaster import JointStateBroadcaster
 from ur_sim_driver.controllers.speed_scaling_state_broadcaster import SpeedScalingStateBroadcaster
 from ur_sim_driver.controllers.tcp_pose_broadcaster import TcpPoseBroadcaster
+from ur_sim_driver.dashboard import DashboardClient
 from ur_sim_driver.errors import TrajectoryError, UrSimError
 from ur_sim_driver.gateway_link import Cancel, Canceled, Ended, Feedback, Gate, GatewayConfig, GatewayLink, Start
 from ur_sim_driver.jtc import Outcome, TrajectoryController
@@ -78,7 +79,7 @@ class UrSimNode(Node):
         self._stop = threading.Event()
         self._feedback_every = max(1, round(self.sim.control_rate / self.cfg.action_monitor_rate))
         self._cycle = 0
-        self.robot = RobotState(powered_off=self.cfg.start_powered_off)
+        self.robot = RobotState(powered_off=self.cfg.start_powered_off, programs=self.cfg.programs)
         self._refusal = self.robot.motion_refusal()
 
         p = self.cfg.prefixed
@@ -104,7 +105,8 @@ class UrSimNode(Node):
         # The driver's controllers and nodes besides the trajectory controller, one module each.
         self.host = Host(self.cfg, self.sim, self._lock, self.robot, self.jtc.scaling, self.context)
         self.components: list[Component] = [
-            JointStateBroadcaster(), SpeedScalingStateBroadcaster(), TcpPoseBroadcaster()]
+            JointStateBroadcaster(), SpeedScalingStateBroadcaster(), TcpPoseBroadcaster(),
+            DashboardClient()]
         for component in self.components:
             component.configure(self.host)
             component.activate()

@@ -1,9 +1,10 @@
 """The robot's modes and program state as a real UR controller keeps them, without ROS.
 
 Robot mode (ur_dashboard_msgs/RobotMode values): POWER_OFF -> power on -> POWER_ON -> IDLE -> brake release ->
-RUNNING. Safety mode (SafetyMode values): NORMAL, PROTECTIVE_STOP, ... Program state: STOPPED, PLAYING, PAUSED,
-of the loaded program. The driver's ``robot_program_running`` is true while the External Control program
-(the driver's URCap program) plays; another program playing leaves it false, as on the robot.
+RUNNING. A brake release while powered off powers the robot on first (as the real robot does). Safety mode
+(SafetyMode values): NORMAL, PROTECTIVE_STOP, ... Program state: STOPPED, PLAYING, PAUSED, of the loaded program.
+The driver's ``robot_program_running`` is true while the External Control program (the driver's URCap program)
+plays; another program playing leaves it false, as on the robot.
 
 Motion is possible only when RUNNING, NORMAL and the External Control program plays; :meth:`RobotState.
 motion_refusal` names what is missing. The transitions that take time on a robot (powering on, releasing the
@@ -12,6 +13,7 @@ advances them. Methods that a dashboard command maps to return None when done or
 """
 from __future__ import annotations
 
+import posixpath
 from dataclasses import dataclass
 
 # ur_dashboard_msgs/RobotMode
@@ -33,6 +35,7 @@ POWER_ON_TIME = 0.5  # [s] of simulated time from power on to IDLE (a robot take
 BRAKE_RELEASE_TIME = 0.5  # [s] from brake release to RUNNING
 UNLOCK_DELAY = 5.0  # [s] after a protective stop before it may be unlocked (the robot's rule)
 EXTERNAL_CONTROL_PROGRAM = 'external_control.urp'
+PROGRAM_DIR = '/programs'  # where an e-series controller keeps its programs
 
 
 @dataclass(frozen=True)
@@ -51,7 +54,8 @@ class RobotState:
 
     Args:
         powered_off: start POWER_OFF with the program stopped (else RUNNING, NORMAL, External Control playing).
-        programs: program files that exist on the simulated robot (the External Control program always does).
+        programs: program files that exist on the simulated robot besides the External Control program,
+            as file names in :data:`PROGRAM_DIR` (e.g. 'wait_program.urp').
     """
 
     def __init__(self, powered_off: bool = False, programs: tuple[str, ...] = ()) -> None:
@@ -59,10 +63,10 @@ class RobotState:
         self.safety_mode = NORMAL
         self.program_state = STOPPED if powered_off else PLAYING
         self.loaded_program = EXTERNAL_CONTROL_PROGRAM
-        self.programs = (EXTERNAL_CONTROL_PROGRAM, *programs)
+        self.programs = tuple(dict.fromkeys((EXTERNAL_CONTROL_PROGRAM, *programs)))
         self.stop_time: float | None = None  # [s] when the last protective stop happened
         self.stop_cause = ''
-        self._pending: tuple[float, int] | None = None  # (time, mode) of a transition under way
+        self._pending: list[tuple[float, int]] = []  # (time [s], mode) steps of a transition under way
         self._now = 0.0
 
     # ---- queries ------------------------------------------------------------------------------
@@ -71,9 +75,19 @@ class RobotState:
                            self.program_running)
 
     @property
+    def now(self) -> float:
+        """[s] simulated time of the last :meth:`update` (or protective stop)."""
+        return self._now
+
+    @property
     def program_running(self) -> bool:
         """The driver's robot_program_running: the External Control program is playing."""
         return self.program_state == PLAYING and self.loaded_program == EXTERNAL_CONTROL_PROGRAM
+
+    @property
+    def loaded_program_path(self) -> str:
+        """The loaded program's full path on the controller, e.g. '/programs/external_control.urp'."""
+        return posixpath.join(PROGRAM_DIR, self.loaded_program)
 
     def motion_refusal(self) -> str | None:
         """None when the robot can move, else why not (names the state)."""
@@ -95,37 +109,50 @@ class RobotState:
             return 0.0
         return max(0.0, self.stop_time + UNLOCK_DELAY - self._now)
 
+    def program_file(self, filename: str) -> str | None:
+        """The program's file name when `filename` (a name or a path in PROGRAM_DIR) exists, else None."""
+        name = posixpath.basename(filename)
+        path = posixpath.normpath(posixpath.join(PROGRAM_DIR, filename))
+        if name in self.programs and path == posixpath.join(PROGRAM_DIR, name):
+            return name
+        return None
+
     # ---- time ------------------------------------------------------------------------------------
     def update(self, t: float) -> bool:
         """Advance to simulated time `t` [s]; True when the robot mode changed."""
         self._now = t
-        if self._pending is not None and t >= self._pending[0]:
-            self.robot_mode = self._pending[1]
-            self._pending = None
-            return True
-        return False
+        changed = False
+        while self._pending and t >= self._pending[0][0]:
+            self.robot_mode = self._pending.pop(0)[1]
+            changed = True
+        return changed
 
     # ---- commands (dashboard) --------------------------------------------------------------------
     def power_on(self) -> str | None:
         if self.robot_mode in (POWER_ON, IDLE, RUNNING):
             return None  # the robot answers "Powering on" again and stays as it is
         self.robot_mode = POWER_ON
-        self._pending = (self._now + POWER_ON_TIME, IDLE)
+        self._pending = [(self._now + POWER_ON_TIME, IDLE)]
         return None
 
     def power_off(self) -> str | None:
         self.robot_mode = POWER_OFF
-        self._pending = None
+        self._pending = []
         self.program_state = STOPPED
         return None
 
     def brake_release(self) -> str | None:
-        if self.robot_mode not in (IDLE, POWER_ON, RUNNING):
-            return f'robot mode is {ROBOT_MODE_NAMES[self.robot_mode]}; brake release needs power (IDLE)'
+        """From IDLE to RUNNING; from POWER_OFF the robot powers on first (the driver documents this)."""
         if self.robot_mode == RUNNING:
             return None
-        self._pending = (max(self._now, self._pending[0] if self._pending else self._now) + BRAKE_RELEASE_TIME,
-                         RUNNING)
+        if self.robot_mode == POWER_OFF:
+            self.power_on()
+        if self.robot_mode not in (POWER_ON, IDLE):
+            return f'robot mode is {ROBOT_MODE_NAMES[self.robot_mode]}; brake release needs power'
+        if any(mode == RUNNING for _, mode in self._pending):
+            return None  # already releasing
+        start = self._pending[-1][0] if self._pending else self._now
+        self._pending.append((start + BRAKE_RELEASE_TIME, RUNNING))
         return None
 
     def play(self) -> str | None:
@@ -133,8 +160,6 @@ class RobotState:
             return f'robot mode is {ROBOT_MODE_NAMES[self.robot_mode]}; play needs RUNNING'
         if self.safety_mode != NORMAL:
             return f'safety mode is {SAFETY_MODE_NAMES[self.safety_mode]}; play needs NORMAL'
-        if not self.loaded_program:
-            return 'no program is loaded'
         self.program_state = PLAYING
         return None
 
@@ -145,14 +170,15 @@ class RobotState:
         return None
 
     def stop(self) -> str | None:
-        if self.program_state == STOPPED:
-            return 'program state is STOPPED already'
+        """Stops the program (a stopped program stays stopped)."""
         self.program_state = STOPPED
         return None
 
-    def load_program(self, name: str) -> str | None:
-        if name not in self.programs:
-            return f'program {name!r} does not exist; programs: {", ".join(self.programs)}'
+    def load_program(self, filename: str) -> str | None:
+        """Load a program by name or path in PROGRAM_DIR; the program is STOPPED afterwards."""
+        name = self.program_file(filename)
+        if name is None:
+            return f'program {filename!r} does not exist; programs: {", ".join(self.programs)}'
         self.program_state = STOPPED
         self.loaded_program = name
         return None
@@ -170,7 +196,7 @@ class RobotState:
 
     def unlock_protective_stop(self) -> str | None:
         if self.safety_mode != PROTECTIVE_STOP:
-            return None  # the robot answers as if released; nothing to do
+            return None  # nothing to unlock
         wait = self.unlock_wait()
         if wait > 0.0:
             return f'protective stop may be unlocked {UNLOCK_DELAY:.0f} s after it happened ({wait:.1f} s left)'

@@ -38,6 +38,7 @@ class SimConfig:
     allow_nonzero_velocity_at_trajectory_end: bool = False
     strict_limit_checks: bool = False
     start_powered_off: bool = False
+    programs: tuple[str, ...] = ('wait_program.urp',)
     update_rate: float = 0.0
     physics_substeps: int = 0
     speed_scaling_initial_factor: float = 1.0
@@ -128,6 +129,7 @@ def sim_config_from_params(params: Mapping[str, Any]) -> SimConfig:
             get('allow_nonzero_velocity_at_trajectory_end', d.allow_nonzero_velocity_at_trajectory_end)),
         strict_limit_checks=bool(get('strict_limit_checks', d.strict_limit_checks)),
         start_powered_off=bool(get('start_powered_off', d.start_powered_off)),
+        programs=_programs(get('programs', d.programs)),
         update_rate=update_rate,
         physics_substeps=substeps,
         speed_scaling_initial_factor=_number('speed_scaling_initial_factor',
@@ -143,6 +145,16 @@ def sim_config_from_params(params: Mapping[str, Any]) -> SimConfig:
         goal_time=_number('constraints.goal_time', get('constraints.goal_time', 0.0), 0.0, 3600.0),
         constraints=tuple(constraints),
     )
+
+
+def _programs(value: Any) -> tuple[str, ...]:
+    # Program files the simulated robot holds besides external_control.urp (the dashboard can load them).
+    names = (value,) if isinstance(value, str) else tuple(value)
+    for name in names:
+        if not isinstance(name, str) or not name.endswith('.urp') or '/' in name or name == '.urp':
+            raise ConfigError(f"parameter 'programs' = {list(names)!r} must be program file names ending in "
+                              f"'.urp' without a directory; {name!r} is not")
+    return names
 
 
 def _controller_name(value: Any) -> str:
