@@ -125,6 +125,40 @@ def topic_moves_arm(h, target, dt: float = 0.5) -> bool:
     return float(np.abs(h.q - q0).max()) > 1e-3
 
 
+# ---- start-up like a real robot (first, before the module's ur_sim starts: one ur_sim at a time) ----
+def test_start_powered_off_sequence_then_goal_succeeds(capfd):
+    err = []
+
+    def logged(text: str) -> bool:  # the controller's interface process logs to the captured stderr
+        err.append(capfd.readouterr().err)
+        return any(text in e for e in err)
+
+    with running_sim(start_powered_off=True) as h:
+        d = Dashboard(h)
+        assert d.ok('get_robot_mode').answer == 'Robotmode: POWER_OFF'
+        assert d.ok('program_state').answer == 'STOPPED external_control.urp'
+        assert not d.ok('program_running').program_running
+        target = h.q + 0.2
+        assert goal_rejected(h, target)
+        assert not topic_moves_arm(h, target)
+        refused = 'the controller is not running: robot mode is POWER_OFF; motion needs RUNNING'
+        wait_for(lambda: logged(f'Rejected FollowJointTrajectory goal: {refused}'), what='the goal rejection logged')
+        wait_for(lambda: logged(f'Dropped JointTrajectory message: {refused}'), what='the message refusal logged')
+        assert d.ok('power_on').message == 'Powering on'
+        assert d.ok('get_robot_mode').robot_mode.mode == RobotMode.IDLE
+        assert goal_rejected(h, target)
+        assert d.ok('brake_release').message == 'Brake releasing'
+        assert d.ok('get_robot_mode').robot_mode.mode == RobotMode.RUNNING
+        assert goal_rejected(h, target)  # External Control is not playing yet
+        assert d.ok('play').message == 'Starting program'
+        assert d.ok('program_running').program_running
+        wait_for(lambda: h.sim.robot.motion_refusal() is None, TIMEOUT, 'motion allowed')
+        handle = send_when_active(h, h.goal([point(target, 1.0, ZERO)]))
+        assert handle.accepted
+        assert h.result(handle)[:2] == (GoalStatus.STATUS_SUCCEEDED, rc.SUCCESSFUL)
+        assert np.abs(h.q - target).max() < 0.01
+
+
 # ---- queries and fixed answers -----------------------------------------------------------------------
 def test_queries_answer_as_the_robot(d):
     r = d.ok('get_robot_mode')
@@ -299,37 +333,3 @@ def test_restart_safety_and_shutdown(d):
     assert d.call('get_robot_mode').answer == NOT_CONNECTED
     d.ok('connect')
     assert d.ok('get_robot_mode').robot_mode.mode == RobotMode.POWER_OFF
-
-
-# ---- start-up like a real robot --------------------------------------------------------------------------
-def test_start_powered_off_sequence_then_goal_succeeds(capfd):
-    err = []
-
-    def logged(text: str) -> bool:  # the controller's interface process logs to the captured stderr
-        err.append(capfd.readouterr().err)
-        return any(text in e for e in err)
-
-    with running_sim(start_powered_off=True) as h:
-        d = Dashboard(h)
-        assert d.ok('get_robot_mode').answer == 'Robotmode: POWER_OFF'
-        assert d.ok('program_state').answer == 'STOPPED external_control.urp'
-        assert not d.ok('program_running').program_running
-        target = h.q + 0.2
-        assert goal_rejected(h, target)
-        assert not topic_moves_arm(h, target)
-        refused = 'the controller is not running: robot mode is POWER_OFF; motion needs RUNNING'
-        wait_for(lambda: logged(f'Rejected FollowJointTrajectory goal: {refused}'), what='the goal rejection logged')
-        wait_for(lambda: logged(f'Dropped JointTrajectory message: {refused}'), what='the message refusal logged')
-        assert d.ok('power_on').message == 'Powering on'
-        assert d.ok('get_robot_mode').robot_mode.mode == RobotMode.IDLE
-        assert goal_rejected(h, target)
-        assert d.ok('brake_release').message == 'Brake releasing'
-        assert d.ok('get_robot_mode').robot_mode.mode == RobotMode.RUNNING
-        assert goal_rejected(h, target)  # External Control is not playing yet
-        assert d.ok('play').message == 'Starting program'
-        assert d.ok('program_running').program_running
-        wait_for(lambda: h.sim.robot.motion_refusal() is None, TIMEOUT, 'motion allowed')
-        handle = send_when_active(h, h.goal([point(target, 1.0, ZERO)]))
-        assert handle.accepted
-        assert h.result(handle)[:2] == (GoalStatus.STATUS_SUCCEEDED, rc.SUCCESSFUL)
-        assert np.abs(h.q - target).max() < 0.01
