@@ -159,6 +159,36 @@ def test_start_powered_off_sequence_then_goal_succeeds(capfd):
         assert np.abs(h.q - target).max() < 0.01
 
 
+def test_protective_stop_unlock_after_five_seconds_and_play():
+    # In real time: the 5 s window must not pass while the test is still checking the stop (fast mode might).
+    with running_sim(real_time_factor=1.0) as h:
+        d = Dashboard(h)
+        handle = h.send(h.goal([point(h.q + 0.5, 4.0, ZERO)]))
+        h.wait_sim_time(0.3)
+        with h.sim._lock:
+            t_stop = h.sim.sim.time
+            h.sim.robot.protective_stop(t_stop, 'test contact: tool0 with windshield, 150 N')
+        status, code, text = h.result(handle)
+        assert (status, code) == (GoalStatus.STATUS_ABORTED, rc.INVALID_GOAL)
+        assert 'PROTECTIVE_STOP' in text and 'windshield' in text
+        assert d.ok('get_safety_mode').safety_mode.mode == SafetyMode.PROTECTIVE_STOP
+        assert d.ok('program_state').state.state == 'PAUSED'
+        assert goal_rejected(h, h.q + 0.1)
+        r = d.call('unlock_protective_stop')
+        assert not r.success
+        assert r.message == ('Expected: Protective stop releasing, but received: Cannot unlock protective stop '
+                             'until 5s after occurrence. Always inspect cause of protective stop before unlocking')
+        assert h.sim.sim.time < t_stop + UNLOCK_DELAY  # the refusal came within the 5 s
+        wait_for(lambda: h.sim.sim.time >= t_stop + UNLOCK_DELAY, what='5 s of simulated time after the stop')
+        assert d.ok('unlock_protective_stop').message == 'Protective stop releasing'
+        assert d.ok('get_safety_mode').safety_mode.mode == SafetyMode.NORMAL
+        assert goal_rejected(h, h.q + 0.1)  # the program is still paused
+        assert d.ok('play').message == 'Starting program'
+        wait_for(lambda: h.sim.robot.motion_refusal() is None, what='motion allowed again')
+        handle = send_when_active(h, h.goal([point(h.q + 0.1, 0.5, ZERO)]))
+        assert h.result(handle)[:2] == (GoalStatus.STATUS_SUCCEEDED, rc.SUCCESSFUL)
+
+
 # ---- queries and fixed answers -----------------------------------------------------------------------
 def test_queries_answer_as_the_robot(d):
     r = d.ok('get_robot_mode')
@@ -296,34 +326,6 @@ def test_controller_stopper_ends_active_goal_and_holds(d, command, state):
     assert np.abs(h.q - q_stop).max() < 0.02  # held where it stopped (plus braking), not at the target
     assert np.abs(h.q - (start + 0.6)).max() > 0.2
     assert np.abs(h.sim.sim.state().qd).max() < 0.01
-
-
-def test_protective_stop_unlock_after_five_seconds_and_play(d):
-    h = d.h
-    handle = h.send(h.goal([point(h.q + 0.5, 4.0, ZERO)]))
-    h.wait_sim_time(0.3)
-    with h.sim._lock:
-        t_stop = h.sim.sim.time
-        h.sim.robot.protective_stop(t_stop, 'test contact: tool0 with windshield, 150 N')
-    status, code, text = h.result(handle)
-    assert (status, code) == (GoalStatus.STATUS_ABORTED, rc.INVALID_GOAL)
-    assert 'PROTECTIVE_STOP' in text and 'windshield' in text
-    assert d.ok('get_safety_mode').safety_mode.mode == SafetyMode.PROTECTIVE_STOP
-    assert d.ok('program_state').state.state == 'PAUSED'
-    assert goal_rejected(h, h.q + 0.1)
-    r = d.call('unlock_protective_stop')
-    assert not r.success
-    assert r.message == ('Expected: Protective stop releasing, but received: Cannot unlock protective stop until 5s '
-                         'after occurrence. Always inspect cause of protective stop before unlocking')
-    assert h.sim.sim.time < t_stop + UNLOCK_DELAY  # the refusal came within the 5 s
-    wait_for(lambda: h.sim.sim.time >= t_stop + UNLOCK_DELAY, what='5 s of simulated time after the stop')
-    assert d.ok('unlock_protective_stop').message == 'Protective stop releasing'
-    assert d.ok('get_safety_mode').safety_mode.mode == SafetyMode.NORMAL
-    assert goal_rejected(h, h.q + 0.1)  # the program is still paused
-    assert d.ok('play').message == 'Starting program'
-    wait_for(lambda: h.sim.robot.motion_refusal() is None, what='motion allowed again')
-    handle = send_when_active(h, h.goal([point(h.q + 0.1, 0.5, ZERO)]))
-    assert h.result(handle)[:2] == (GoalStatus.STATUS_SUCCEEDED, rc.SUCCESSFUL)
 
 
 def test_restart_safety_and_shutdown(d):
