@@ -36,6 +36,8 @@ fallen and is aborted by the path tolerance, as on the real robot.
 """
 from __future__ import annotations
 
+import math
+
 import numpy as np
 
 FALL_TIME = 0.04  # [s] the factor can fall from 1 to 0 in this time (5 CB3 cycles, 20 e-series cycles)
@@ -121,8 +123,8 @@ class RobotSpeedScaling:
             self.input = float(input_factor)
         if self.slider != self.slider_applied:
             ramp = self._ramp(rate, self.input * self.own, period)
-            step = min(max(self.slider - self.slider_applied, -ramp), ramp)
-            self.slider_applied = self.slider if abs(step) == np.inf else self.slider_applied + step
+            gap = self.slider - self.slider_applied
+            self.slider_applied = self.slider if abs(gap) <= ramp else self.slider_applied + math.copysign(ramp, gap)
         # The slider already slows the reference: the robot's own slowdown is needed only beyond it.
         target = min(velocity_fraction(rate, self.v_max, self.input * self.slider_applied), lag_fraction(lag))
         step_down, step_up = period / FALL_TIME, period / RISE_TIME
