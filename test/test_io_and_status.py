@@ -115,7 +115,8 @@ def test_io_round_trips_refusals_inputs_and_cb3_version():
 
         # set_io, then io_states shows it within one control cycle of the answer.
         answered = []
-        future = client_for(h, SetIO, f'{IO}/set_io').call_async(SetIO.Request(fun=SetIO.Request.FUN_SET_DIGITAL_OUT, pin=5, state=1.0))
+        request = SetIO.Request(fun=SetIO.Request.FUN_SET_DIGITAL_OUT, pin=5, state=1.0)
+        future = client_for(h, SetIO, f'{IO}/set_io').call_async(request)
         future.add_done_callback(lambda _: answered.append(h.sim.sim.time))
         wait_for(lambda: answered, what='the set_io answer')
         assert future.result().success
