@@ -60,3 +60,69 @@ def test_lower_input_is_ramped_at_the_acceleration_limit_and_a_higher_one_applie
     held = RobotSpeedScaling(V_MAX, A_MAX)
     held.update(np.zeros(2), np.zeros(2), 0.0, dt)
     assert held.input == 0.0
+
+
+def test_slider_applies_at_once_while_holding_and_multiplies_the_reported_factor():
+    s = RobotSpeedScaling(V_MAX, A_MAX)
+    s.slider = 0.3
+    s.update(np.zeros(2), np.zeros(2), 1.0, 0.002)
+    assert s.slider_applied == 0.3 and s.factor == pytest.approx(0.3)
+    assert s.total == pytest.approx(0.3)
+    s.update(np.zeros(2), np.zeros(2), 0.5, 0.002)
+    assert s.total == pytest.approx(0.5 * 0.3)
+
+
+def test_slider_is_ramped_at_the_acceleration_limit_while_moving():
+    s = RobotSpeedScaling(V_MAX, A_MAX)
+    dt = 0.002
+    rate = np.array([2.0, 0.0])  # joint 0 at 2 rad/s at factor 1
+    s.slider = 0.1
+    s.update(rate, np.zeros(2), 1.0, dt)
+    assert s.slider_applied == pytest.approx(1.0 - 5.0 / 2.0 * dt)  # velocity falls by a_max * dt
+    velocities = []
+    for _ in range(1000):
+        s.update(rate, np.zeros(2), 1.0, dt)
+        velocities.append(rate[0] * s.total)
+    assert s.slider_applied == pytest.approx(0.1) and s.factor == pytest.approx(0.1)
+    assert np.abs(np.diff(velocities)).max() <= 5.0 * dt * (1 + 1e-9)
+    # Back up: ramped the same way, not at once.
+    s.slider = 1.0
+    s.update(rate, np.zeros(2), 1.0, dt)
+    assert s.slider_applied == pytest.approx(0.1 + 5.0 / 2.0 * dt)
+
+
+def test_slider_spares_the_robots_own_slowdown():
+    # A reference at 1.5x joint 1's limit: at slider 1 the robot slows itself, at slider 0.5 it need not.
+    rate = np.array([0.0, 3.0])
+    fast, slow = RobotSpeedScaling(V_MAX, A_MAX), RobotSpeedScaling(V_MAX, A_MAX)
+    slow.slider = 0.5
+    slow.update(np.zeros(2), np.zeros(2), 1.0, 0.002)  # applied while holding
+    for _ in range(500):
+        fast.update(rate, np.zeros(2), 1.0, 0.002)
+        slow.update(rate, np.zeros(2), 1.0, 0.002)
+    assert fast.own == pytest.approx(VELOCITY_MARGIN * 2.0 / 3.0) and fast.factor == fast.own
+    assert slow.own == 1.0 and slow.factor == pytest.approx(0.5)
+    assert abs(rate[1]) * slow.total <= VELOCITY_MARGIN * V_MAX[1]
+
+
+def test_trajectory_time_follows_the_slider():
+    from ur_sim_driver.jtc import TrajectoryController
+    from ur_sim_driver.tolerances import default_tolerances
+    from ur_sim_driver.trajectory_types import TrajectoryPoints
+
+    names = ('a', 'b')
+    tol = default_tolerances(names, trajectory=0.2, goal=0.1, stopped_velocity=0.2, goal_time=0.0)
+    jtc = TrajectoryController(names, tol, np.zeros(2), V_MAX, A_MAX)
+    jtc.scaling.slider = 0.25
+    dt = 0.002
+    q = np.zeros(2)
+    jtc.update(0.0, dt, q, q)  # holding: the slider applies at once
+    points = TrajectoryPoints(names, np.array([4.0]), np.array([[0.4, 0.0]]), np.zeros((1, 2)), np.zeros((1, 2)),
+                              np.array([False]), np.array([False]))
+    jtc.start(points, dt, q, q)
+    for k in range(1, 501):
+        sample, _ = jtc.update(k * dt, dt, q, np.zeros(2))
+        q = sample.positions  # a perfect arm
+    # 1 s of real time is 0.25 s of trajectory time (the slow reference needs no slowdown of the robot's own).
+    assert jtc.trajectory_time - dt == pytest.approx(500 * dt * 0.25)
+    assert jtc.scaling.factor == pytest.approx(0.25)

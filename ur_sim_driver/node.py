@@ -29,9 +29,11 @@ from std_msgs.msg import String
 from ur_sim_driver import conversions as conv
 from ur_sim_driver import result_codes
 from ur_sim_driver.controllers.base import Component, Cycle, Host
+from ur_sim_driver.controllers.io_and_status import IoAndStatusController
 from ur_sim_driver.controllers.joint_state_broadcaster import JointStateBroadcaster
 from ur_sim_driver.controllers.speed_scaling_state_broadcaster import SpeedScalingStateBroadcaster
 from ur_sim_driver.controllers.tcp_pose_broadcaster import TcpPoseBroadcaster
+from ur_sim_driver.controllers.ur_configuration import UrConfigurationController
 from ur_sim_driver.dashboard import DashboardClient
 from ur_sim_driver.errors import TrajectoryError, UrSimError
 from ur_sim_driver.gateway_link import Cancel, Canceled, Ended, Feedback, Gate, GatewayConfig, GatewayLink, Start
@@ -40,6 +42,7 @@ from ur_sim_driver.memory import use_mmap_for_large_blocks
 from ur_sim_driver.robot_state import PROTECTIVE_STOP, RobotState
 from ur_sim_driver.safety import contact_cause, limit_cause
 from ur_sim_driver.sim_config import SimConfig, sim_config_from_params
+from ur_sim_driver.sim_io import SimulatedInputs
 from ur_sim_driver.simulator import Simulator
 from ur_sim_driver.tolerances import default_tolerances
 from ur_sim_driver.validation import map_to_config_order
@@ -107,7 +110,7 @@ class UrSimNode(Node):
         self.host = Host(self.cfg, self.sim, self._lock, self.robot, self.jtc.scaling, self.context)
         self.components: list[Component] = [
             JointStateBroadcaster(), SpeedScalingStateBroadcaster(), TcpPoseBroadcaster(),
-            DashboardClient()]
+            IoAndStatusController(), UrConfigurationController(), DashboardClient(), SimulatedInputs()]
         for component in self.components:
             component.configure(self.host)
             component.activate()

@@ -11,6 +11,7 @@ from ur_sim_driver.description.params import load_ur_params
 from ur_sim_driver.description.tool import get_tool
 from ur_sim_driver.description.urdf import build_urdf
 from ur_sim_driver.errors import ConfigError
+from ur_sim_driver.io_bank import IoBank
 from ur_sim_driver.physics import ArmPhysics, ArmState
 from ur_sim_driver.scene import load_scene, pose_matrix
 from ur_sim_driver.servo import JointServo, ServoLimits, Setpoint
@@ -65,6 +66,8 @@ class Simulator:
         self.servo = JointServo(q0, self.control_rate)
         self.a_max = np.full(len(q0), self.params.a_max)
         self.last_setpoint: Setpoint | None = None
+        # The robot's IO (immutable; replaced under the simulation lock, read as one snapshot without it).
+        self.io = IoBank()
 
     @property
     def time(self) -> float:

@@ -22,13 +22,21 @@ Model, per control cycle:
   that the reference decelerates at the joints' acceleration limit rather than stopping dead, which the arm
   could not follow without passing the paused reference.
 
-Trajectory time advances by ``period x input x factor``.
+The speed slider (``set_speed_slider``, the teach pendant's slider) multiplies all of it, as on the robot:
+the reported factor is ``slider x own slowdown`` and trajectory time advances by
+``period x input x slider x own slowdown``. A new slider position is ramped so that the reference velocity
+changes at most at the joints' acceleration limit (at once while the arm holds still), so that moving the
+slider does not jerk a moving arm.
+
+Trajectory time advances by ``period x input x factor`` (``factor`` includes the slider).
 
 A motion that is only mildly infeasible is slowed before its lag reaches the path tolerance (0.2 rad by
 default); one that asks far too much (a step, 20 times the speed limit) runs away before the factor has
 fallen and is aborted by the path tolerance, as on the real robot.
 """
 from __future__ import annotations
+
+import math
 
 import numpy as np
 
@@ -37,6 +45,7 @@ RISE_TIME = 0.5  # [s] ... and rise from 0 to 1 in this time
 LAG_DEAD_ZONE = 0.01  # [rad] lag the robot tolerates before slowing
 LAG_SPAN = 0.1  # [rad] further lag at which the factor reaches 0
 VELOCITY_MARGIN = 0.98  # fraction of the velocity limit the scaled reference may use
+SLIDER_MIN, SLIDER_MAX = 0.01, 1.0  # the speed slider's range (set_speed_slider refuses anything else)
 
 
 def velocity_fraction(rate: np.ndarray, v_max: np.ndarray, input_factor: float) -> float:
@@ -63,27 +72,43 @@ class RobotSpeedScaling:
 
     Args:
         v_max: (n,) joint velocity limits [rad/s].
-        a_max: (n,) joint acceleration limits [rad/s^2] (for the ramp of the input factor).
+        a_max: (n,) joint acceleration limits [rad/s^2] (for the ramps of the input factor and the slider).
         input_factor: initial speed_scaling_input factor in [0, 1].
 
     Attributes:
-        factor: the robot's own factor in [0, 1] (what the speed scaling broadcaster reports).
+        own: the robot's own slowdown in [0, 1] (velocity and lag fractions, rate limited).
+        slider: the speed slider position asked for, in [0.01, 1] (set by ``set_speed_slider``).
+        slider_applied: the slider as applied (ramped towards `slider`, see the module docstring).
         input: the speed_scaling_input factor as applied (ramped down, see the module docstring).
     """
 
     def __init__(self, v_max: np.ndarray, a_max: np.ndarray, input_factor: float = 1.0) -> None:
         self.v_max = np.asarray(v_max, dtype=float)
         self.a_max = np.asarray(a_max, dtype=float)
-        self.factor = 1.0
+        self.own = 1.0
+        self.slider = 1.0
+        self.slider_applied = 1.0
         self.input = float(input_factor)
+
+    @property
+    def factor(self) -> float:
+        """The robot's speed scaling in [0, 1]: slider x own slowdown (what the broadcaster reports)."""
+        return self.slider_applied * self.own
 
     @property
     def total(self) -> float:
         """input x factor: what trajectory time advances by per unit of real time."""
         return self.input * self.factor
 
+    def _ramp(self, rate: np.ndarray, gain: float, period: float) -> float:
+        """Largest change of a multiplier of `rate` x `gain` in one period keeping the change of every joint's
+        reference velocity within a_max x period (inf when nothing moves)."""
+        speed = np.abs(rate) * gain
+        with np.errstate(divide='ignore'):
+            return float(np.min(np.where(speed > 0.0, self.a_max / speed, np.inf))) * period
+
     def update(self, rate: np.ndarray, lag: np.ndarray, input_factor: float, period: float) -> float:
-        """Advance one cycle and return the new factor.
+        """Advance one cycle and return the new factor (slider x own slowdown).
 
         Args:
             rate: (n,) reference velocity per unit trajectory time [rad/s at factor 1].
@@ -92,13 +117,16 @@ class RobotSpeedScaling:
             period: control period [s].
         """
         if input_factor < self.input:
-            speed = np.abs(rate) * self.factor
-            with np.errstate(divide='ignore'):
-                ramp = float(np.min(np.where(speed > 0.0, self.a_max / speed, np.inf))) * period
+            ramp = self._ramp(rate, self.factor, period)
             self.input = max(float(input_factor), self.input - ramp)
         else:
             self.input = float(input_factor)
-        target = min(velocity_fraction(rate, self.v_max, self.input), lag_fraction(lag))
+        if self.slider != self.slider_applied:
+            ramp = self._ramp(rate, self.input * self.own, period)
+            gap = self.slider - self.slider_applied
+            self.slider_applied = self.slider if abs(gap) <= ramp else self.slider_applied + math.copysign(ramp, gap)
+        # The slider already slows the reference: the robot's own slowdown is needed only beyond it.
+        target = min(velocity_fraction(rate, self.v_max, self.input * self.slider_applied), lag_fraction(lag))
         step_down, step_up = period / FALL_TIME, period / RISE_TIME
-        self.factor = min(max(target, self.factor - step_down), self.factor + step_up)
+        self.own = min(max(target, self.own - step_down), self.own + step_up)
         return self.factor
