@@ -50,6 +50,9 @@ class RobotStatePublisher(Component):
         self._pub_tf = node.create_publisher(TFMessage, '/tf', 100)
         self._period = 1.0 / cfg.publish_frequency
         self._next = 0.0
+        # Simulated time is a sum of physics steps, a hair off the multiples of the period: half a control
+        # period of slack keeps the publishing on the cycle nearest each multiple.
+        self._slack = 0.5 * sim.control_dt
 
         tree = kinematic_tree(sim.params, cfg.tf_prefix, get_tool(cfg.tool))
         stamp = conv.sec_to_time(sim.time)
@@ -71,10 +74,10 @@ class RobotStatePublisher(Component):
         self._pub_static.publish(TFMessage(transforms=static))
 
     def update(self, cycle: Cycle) -> None:
-        t = cycle.t
+        t = cycle.t + self._slack
         if t < self._next:
             return
-        self._next = (math.floor(t / self._period + 1e-9) + 1) * self._period
+        self._next = (math.floor(t / self._period) + 1) * self._period
         q = cycle.state.q
         stamp = cycle.stamp
         for tf, (w1, x1, y1, z1), i in zip(self._moving, self._origin_quat, self._index):
