@@ -12,6 +12,7 @@ from sim_harness import point, running_sim, trajectory, wait_for
 
 from ur_sim_driver import result_codes as rc
 from ur_sim_driver.description.params import load_ur_params
+from ur_sim_driver.robot_state import PROTECTIVE_STOP
 
 # As the driver's test_common.ROBOT_JOINTS: not the controller's order.
 ROBOT_JOINTS = ['elbow_joint', 'shoulder_lift_joint', 'shoulder_pan_joint', 'wrist_1_joint', 'wrist_2_joint',
@@ -103,18 +104,27 @@ def test_jump_at_time_zero_is_a_path_violation_and_the_arm_holds(robot):
 
 
 def test_a_target_beyond_the_position_limit_stops_at_the_limit(robot):
-    # Accepted, as by the real driver; the robot brakes to a stop at wrist_3's limit (+2 pi) and goes no further.
+    # Accepted, as by the real driver; the robot brakes to a stop at wrist_3's limit (+2 pi), goes no further,
+    # and its safety system enters a protective stop, which must be unlocked before it moves again.
     h = robot
     q0 = h.q
     target = q0.copy()
     target[5] = 2 * np.pi + 0.5
     rec = h.record()
     h.topic.publish(trajectory(h.joints, [point(target, 4.0)]))
-    h.wait_sim_time(6.0)
+    wait_for(lambda: h.sim.robot.safety_mode == PROTECTIVE_STOP, what='the protective stop')
+    assert 'wrist_3_joint driven into its position limit 6.2832 rad' in h.sim.robot.stop_cause
+    h.wait_sim_time(1.0)
     h.stop_recording()
     _, q, qd = rec.arrays()
     assert q[:, 5].max() <= 2 * np.pi + 1e-3
     assert q[-1, 5] > 2 * np.pi - 0.01
     assert (np.abs(qd) <= 1.01 * h.params.v_max).all()
+    with h.sim.host.lock:
+        assert h.sim.robot.unlock_protective_stop() is not None  # within 5 s: refused
+    h.wait_sim_time(5.0)
+    with h.sim.host.lock:
+        assert h.sim.robot.unlock_protective_stop() is None
+        assert h.sim.robot.play() is None
     h.topic.publish(trajectory(h.joints, [point(q0, 4.0)]))
     wait_for(lambda: np.abs(h.q - q0).max() < 1e-3, what='the way back')

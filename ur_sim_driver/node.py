@@ -35,8 +35,9 @@ from ur_sim_driver.errors import TrajectoryError, UrSimError
 from ur_sim_driver.gateway_link import Cancel, Canceled, Ended, Feedback, Gate, GatewayConfig, GatewayLink, Start
 from ur_sim_driver.jtc import Outcome, TrajectoryController
 from ur_sim_driver.memory import use_mmap_for_large_blocks
-from ur_sim_driver.robot_state import RobotState
+from ur_sim_driver.robot_state import PROTECTIVE_STOP, RobotState
 from ur_sim_driver.robot_state_publisher import RobotStatePublisher
+from ur_sim_driver.safety import contact_cause, limit_cause
 from ur_sim_driver.sim_config import SimConfig, sim_config_from_params
 from ur_sim_driver.simulator import Simulator
 from ur_sim_driver.tolerances import default_tolerances
@@ -152,10 +153,12 @@ class UrSimNode(Node):
                     state = self.sim.state()
                     preempted = self.jtc.start(points, state.t, state.q, state.qd, token=message.token,
                                                tolerances=message.tolerances)
-            if refusal is not None:  # the state changed while the gateway accepted it
+            if refusal is not None:  # a topic message, or a goal accepted while the state changed
+                reason = f'the controller is not running: {refusal}'
                 if message.token is not None:
-                    self._finish(Outcome(message.token, result_codes.INVALID_GOAL,
-                                         f'the controller is not running: {refusal}'))
+                    self._finish(Outcome(message.token, result_codes.INVALID_GOAL, reason))
+                else:
+                    self.get_logger().error(f'Dropped JointTrajectory message: {reason}')
                 return
             if preempted is not None:
                 self._finish(preempted)
@@ -230,14 +233,21 @@ class UrSimNode(Node):
                 viewer.close()
 
     def step_once(self) -> None:
-        """One control cycle: robot state, JTC update, torques, physics step, then the components publish."""
+        """One control cycle: robot state, JTC update, torques, physics step, safety, then the components publish."""
         with self._lock:
             state = self.sim.state()
-            stopped = self._controller_stopper(state)
+            self.robot.update(state.t)
+            ended = [self._controller_stopper(state.q)]
             sample, outcome = self.jtc.update(state.t, self.sim.control_dt, state.q, state.qd)
             tcp_position, tcp_orientation = self.sim.tcp_pose()
             wrench = self.sim.wrench()
             tau = self.sim.advance(state, sample, self.jtc.stop)
+            ended.append(outcome)
+            cause = self._safety_check(sample)
+            if cause is not None:
+                # Seen in this cycle's physics step: the arm is halted from the next cycle on.
+                self.robot.protective_stop(self.sim.time, cause)
+                ended.append(self._controller_stopper(self.sim.state().q))
             token = self.jtc.active_token
             feedback_due = token is not None and self._cycle % self._feedback_every == 0
             robot_factor, total_factor = self.jtc.scaling.factor, self.jtc.scaling.total
@@ -250,15 +260,26 @@ class UrSimNode(Node):
         self._publish(cycle)
         if feedback_due:
             self._publish_feedback(token, state, sample)
-        for ended in (stopped, outcome):
-            if ended is not None:
-                self._finish(ended)
+        for e in ended:
+            if e is not None:
+                self._finish(e)
+        if cause is not None:
+            self.get_logger().error(f'PROTECTIVE_STOP: {cause}')
         self._cycle += 1
 
-    def _controller_stopper(self, state) -> Outcome | None:
-        """Under the lock: advance the robot state; when the robot can no longer move, end the active goal and
-        hold, as the driver's controller_stopper deactivates the controllers; tell the gateway either way."""
-        self.robot.update(state.t)
+    def _safety_check(self, sample) -> str | None:
+        """Under the lock, after the physics step: the cause of a protective stop, or None."""
+        if self.robot.safety_mode == PROTECTIVE_STOP:
+            return None
+        p = self.sim.params
+        cause = contact_cause(self.sim.physics.contacts(), self.cfg.protective_stop_force)
+        if cause is None:
+            cause = limit_cause(self.sim.physics.positions(), sample.positions, p.q_min, p.q_max, self.joints)
+        return cause
+
+    def _controller_stopper(self, q: np.ndarray) -> Outcome | None:
+        """Under the lock: when the robot can no longer move, hold `q` and end the active goal, as the driver's
+        controller_stopper deactivates the controllers; tell the gateway of every change."""
         refusal = self.robot.motion_refusal()
         if refusal == self._refusal:
             return None
@@ -267,7 +288,7 @@ class UrSimNode(Node):
         if refusal is None:
             return None
         token = self.jtc.active_token
-        self.jtc.hold(state.q)
+        self.jtc.hold(q)
         if token is None:
             return None
         return Outcome(token, result_codes.INVALID_GOAL, f'the controller was deactivated: {refusal}')

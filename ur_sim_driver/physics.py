@@ -8,6 +8,7 @@ import mujoco
 import numpy as np
 
 from ur_sim_driver.errors import ConfigError
+from ur_sim_driver.safety import Contact
 
 
 @dataclass(frozen=True, eq=False)
@@ -68,6 +69,15 @@ class ArmPhysics:
         self._payload = lookup(mujoco.mjtObj.mjOBJ_BODY, payload_body, 'body')
         sensors = [lookup(mujoco.mjtObj.mjOBJ_SENSOR, s, 'sensor') for s in ft_sensors]
         self._ft = np.concatenate([np.arange(m.sensor_adr[s], m.sensor_adr[s] + 3) for s in sensors])
+        # Per geom, once: which belong to the robot (the subtree of the base body's root, i.e. arm and tool)
+        # and the name a contact report uses (the body, or the geom for bodies fixed to the world).
+        root = int(m.body_rootid[self._base])
+        self._robot_geom = m.body_rootid[m.geom_bodyid] == root
+        self._geom_label = [
+            mujoco.mj_id2name(m, mujoco.mjtObj.mjOBJ_BODY, int(b)) if b != 0
+            else (mujoco.mj_id2name(m, mujoco.mjtObj.mjOBJ_GEOM, g) or f'geom {g}')
+            for g, b in enumerate(m.geom_bodyid)]
+        self._force6 = np.zeros(6)
 
     def _actuator_for(self, joint_id: int) -> int:
         m = self.model
@@ -95,6 +105,10 @@ class ArmPhysics:
         return ArmState(float(d.time), d.qpos[self._qpos].copy(), d.qvel[self._dof].copy(),
                         d.actuator_force[self._act].copy())
 
+    def positions(self) -> np.ndarray:
+        """(n,) joint positions now [rad]."""
+        return self.data.qpos[self._qpos].copy()
+
     def dynamics(self) -> tuple[np.ndarray, np.ndarray]:
         """M(q) (n, n) [kg m^2] and h(q, qd) = gravity + Coriolis - passive (n,) [N m] at the current state."""
         mujoco.mj_fullM(self.model, self.data, self._mass)
@@ -110,6 +124,24 @@ class ArmPhysics:
         for _ in range(self.substeps):
             mujoco.mj_step2(self.model, self.data)
             mujoco.mj_step1(self.model, self.data)
+
+    def contacts(self) -> tuple[Contact, ...]:
+        """Contacts of the robot (arm and tool) with the scene or itself, in the current state."""
+        d = self.data
+        if d.ncon == 0:
+            return ()
+        found = []
+        for i in range(d.ncon):
+            c = d.contact[i]
+            g1, g2 = int(c.geom1), int(c.geom2)
+            r1, r2 = self._robot_geom[g1], self._robot_geom[g2]
+            if not (r1 or r2):
+                continue  # two scene bodies
+            mujoco.mj_contactForce(self.model, d, i, self._force6)
+            part, other = (g1, g2) if r1 else (g2, g1)
+            found.append(Contact(self._geom_label[part], self._geom_label[other],
+                                 float(np.linalg.norm(self._force6[:3])), max(0.0, -float(c.dist))))
+        return tuple(found)
 
     def tcp_pose(self) -> tuple[np.ndarray, np.ndarray]:
         """TCP pose in the base frame: position (3,) [m] and quaternion (4,) as (x, y, z, w)."""

@@ -7,6 +7,7 @@ from dataclasses import dataclass
 from typing import Any
 
 from ur_sim_driver.errors import ConfigError
+from ur_sim_driver.safety import DEFAULT_CONTACT_FORCE
 
 UR_TYPES = ('ur5', 'ur5e', 'ur10', 'ur10e')
 TOOLS = ('none', 'dispenser')
@@ -38,6 +39,7 @@ class SimConfig:
     allow_nonzero_velocity_at_trajectory_end: bool = False
     strict_limit_checks: bool = False
     start_powered_off: bool = False
+    protective_stop_force: float = DEFAULT_CONTACT_FORCE
     update_rate: float = 0.0
     physics_substeps: int = 0
     speed_scaling_initial_factor: float = 1.0
@@ -129,6 +131,9 @@ def sim_config_from_params(params: Mapping[str, Any]) -> SimConfig:
             get('allow_nonzero_velocity_at_trajectory_end', d.allow_nonzero_velocity_at_trajectory_end)),
         strict_limit_checks=bool(get('strict_limit_checks', d.strict_limit_checks)),
         start_powered_off=bool(get('start_powered_off', d.start_powered_off)),
+        protective_stop_force=_number('protective_stop_force', get('protective_stop_force',
+                                                                   d.protective_stop_force), 0.0, 1e4,
+                                      lo_open=True),
         update_rate=update_rate,
         physics_substeps=substeps,
         speed_scaling_initial_factor=_number('speed_scaling_initial_factor',

@@ -83,10 +83,6 @@ class TrajectoryGateway:
 
     # ---- validation --------------------------------------------------------------------------------
     def _validate(self, cmd: CommandArrays, what: str) -> str | None:
-        refusal = self.refusal
-        if refusal is not None:
-            # Upstream's JTC rejects everything while inactive; the controller_stopper deactivated it.
-            return f'the controller is not running: {refusal}'
         cfg = self.cfg
         (now,) = struct.unpack_from('d', self._sim_time, 0)
         strict = cfg.strict_limits
@@ -105,7 +101,10 @@ class TrajectoryGateway:
     def _on_goal(self, goal: FollowJointTrajectory.Goal) -> GoalResponse:
         traj = goal.trajectory
         cmd = from_points(traj.joint_names, conv.time_to_sec(traj.header.stamp), traj.points)
-        reason = self._validate(cmd, 'FollowJointTrajectory goal')
+        # Upstream's JTC rejects goals while inactive, and the controller_stopper deactivates it while the robot
+        # cannot move. (Topic messages are refused by the simulation, which knows the state without delay.)
+        reason = None if self.refusal is None else f'the controller is not running: {self.refusal}'
+        reason = reason or self._validate(cmd, 'FollowJointTrajectory goal')
         if reason is None and goal.multi_dof_trajectory.points:
             reason = 'multi_dof_trajectory is not supported by this controller (it has no multi-DOF joints)'
         if reason is not None:

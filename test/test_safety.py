@@ -1,0 +1,55 @@
+"""The protective-stop rules (pure) and the contacts MuJoCo reports for them."""
+import numpy as np
+import pytest
+
+from ur_sim_driver.safety import LIMIT_MARGIN, Contact, contact_cause, limit_cause
+from ur_sim_driver.sim_config import sim_config_from_params
+from ur_sim_driver.simulator import Simulator
+
+NAMES = tuple(f'j{i}' for i in range(6))
+Q_MIN, Q_MAX = np.full(6, -1.0), np.full(6, 1.0)
+
+
+def test_the_strongest_contact_above_the_limit_is_named():
+    contacts = (Contact('wrist_3_link', 'floor', 20.0, 1e-4), Contact('dispenser', 'windshield_piece_03', 80.0, 6e-4),
+                Contact('forearm_link', 'floor', 60.0, 1e-4))
+    cause = contact_cause(contacts, 50.0)
+    assert cause.startswith('contact between dispenser and windshield_piece_03: force 80.0 N > 50.0 N')
+    assert '0.60 mm' in cause
+    assert contact_cause(contacts, 80.0) is None  # above, not at, the limit
+    assert contact_cause((), 50.0) is None
+
+
+def test_a_joint_driven_into_its_limit_stops_but_one_ending_at_it_does_not():
+    q = np.zeros(6)
+    q[2] = 1.0 - LIMIT_MARGIN / 2
+    ref = q.copy()
+    ref[2] = 1.3
+    assert limit_cause(q, ref, Q_MIN, Q_MAX, NAMES).startswith('j2 driven into its position limit 1.0000 rad')
+    ref[2] = 1.0  # a trajectory that ends exactly at the limit
+    assert limit_cause(q, ref, Q_MIN, Q_MAX, NAMES) is None
+    ref[2] = 1.3
+    q[2] = 0.9  # still on its way: the servo brakes before the limit
+    assert limit_cause(q, ref, Q_MIN, Q_MAX, NAMES) is None
+    q[4], ref[4] = -1.0, -2.0
+    assert 'j4 driven into its position limit -1.0000 rad' in limit_cause(q, ref, Q_MIN, Q_MAX, NAMES)
+
+
+@pytest.mark.parametrize('ur_type', ['ur5', 'ur5e', 'ur10', 'ur10e'])
+def test_mujoco_reports_links_in_the_floor_with_the_floor_named(ur_type):
+    # Stretched out and tilted 0.3 rad down from the shoulder: forearm and wrist reach into the floor.
+    # (The contacts of the state after reset: a step would throw the arm out of the penetration.)
+    sim = Simulator(sim_config_from_params({'ur_type': ur_type, 'initial_positions': [0.0, 0.3, 0.0, 0.0, 0.0, 0.0]}))
+    contacts = sim.physics.contacts()
+    assert contacts, 'expected contacts with the floor'
+    assert all(c.other == 'floor' for c in contacts)
+    assert {'forearm_link', 'wrist_3_link'} <= {c.robot_part for c in contacts}
+    assert 'base_link_inertia' not in {c.robot_part for c in contacts}
+    assert max(c.force for c in contacts) > 50.0
+    assert max(c.depth for c in contacts) > 0.05
+
+
+def test_no_contacts_at_the_default_start_with_the_windshield():
+    sim = Simulator(sim_config_from_params({'tool': 'dispenser', 'scene': 'windshield'}))
+    sim.physics.step(np.zeros(6))
+    assert sim.physics.contacts() == ()
