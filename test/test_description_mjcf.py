@@ -10,7 +10,7 @@ import numpy as np
 import pinocchio as pin
 import pytest
 
-from ur_sim_driver.description.mjcf import add_static_mesh, build_mjcf
+from ur_sim_driver.description.mjcf import PAYLOAD_BODY, add_static_mesh, build_mjcf
 from ur_sim_driver.description.params import JOINT_NAMES, UR_TYPES, load_ur_params
 from ur_sim_driver.description.tool import DISPENSER
 from ur_sim_driver.description.urdf import build_urdf
@@ -62,8 +62,10 @@ def test_frames_agree_with_pinocchio_and_dh(pair):
         np.testing.assert_allclose(np.linalg.inv(pose(base.xpos, base.xmat)) @ pose(tool0.xpos, tool0.xmat),
                                    ur_dh_fk(p.dh, q), atol=1e-9)
     for name in bodies:  # every link frame, checked at the last configuration
+        # The payload body is MuJoCo's only (set_payload's mass at the flange): its frame is tool0's.
+        frame = 'tool0' if name == PAYLOAD_BODY else name
         np.testing.assert_allclose(pose(md.body(name).xpos, md.body(name).xmat),
-                                   pd.oMf[pm.getFrameId(name)].homogeneous, atol=1e-9)
+                                   pd.oMf[pm.getFrameId(frame)].homogeneous, atol=1e-9)
 
 
 def test_gravity_and_mass_matrix_agree_with_pinocchio(pair):

@@ -21,14 +21,13 @@ from control_msgs.msg import JointTrajectoryControllerState, SpeedScalingFactor
 from rclpy.callback_groups import MutuallyExclusiveCallbackGroup
 from rclpy.executors import ExternalShutdownException, MultiThreadedExecutor
 from rclpy.node import Node
-from rclpy.qos import DurabilityPolicy, QoSProfile
 from rclpy.signals import SignalHandlerOptions
 from rosgraph_msgs.msg import Clock
-from std_msgs.msg import String
 
 from ur_sim_driver import conversions as conv
 from ur_sim_driver import result_codes
 from ur_sim_driver.controllers.base import Component, Cycle, Host
+from ur_sim_driver.controllers.force_torque_sensor_broadcaster import ForceTorqueSensorBroadcaster
 from ur_sim_driver.controllers.io_and_status import IoAndStatusController
 from ur_sim_driver.controllers.joint_state_broadcaster import JointStateBroadcaster
 from ur_sim_driver.controllers.speed_scaling_state_broadcaster import SpeedScalingStateBroadcaster
@@ -40,6 +39,7 @@ from ur_sim_driver.gateway_link import Cancel, Canceled, Ended, Feedback, Gate, 
 from ur_sim_driver.jtc import Outcome, TrajectoryController
 from ur_sim_driver.memory import use_mmap_for_large_blocks
 from ur_sim_driver.robot_state import PROTECTIVE_STOP, RobotState
+from ur_sim_driver.robot_state_publisher import RobotStatePublisher
 from ur_sim_driver.safety import contact_cause, limit_cause
 from ur_sim_driver.sim_config import SimConfig, sim_config_from_params
 from ur_sim_driver.sim_io import SimulatedInputs
@@ -90,9 +90,6 @@ class UrSimNode(Node):
         ctrl = self.cfg.controller_name
         self._pub_state = self.create_publisher(JointTrajectoryControllerState, p(f'{ctrl}/controller_state'), 10)
         self._pub_clock = self.create_publisher(Clock, '/clock', 10)
-        latched = QoSProfile(depth=1, durability=DurabilityPolicy.TRANSIENT_LOCAL)
-        self._pub_description = self.create_publisher(String, p('robot_description'), latched)
-        self._pub_description.publish(String(data=self.sim.urdf))
 
         self.create_subscription(SpeedScalingFactor, p(f'{ctrl}/speed_scaling_input'), self._on_speed_scaling,
                                  10, callback_group=MutuallyExclusiveCallbackGroup())
@@ -110,7 +107,8 @@ class UrSimNode(Node):
         self.host = Host(self.cfg, self.sim, self._lock, self.robot, self.jtc.scaling, self.context)
         self.components: list[Component] = [
             JointStateBroadcaster(), SpeedScalingStateBroadcaster(), TcpPoseBroadcaster(),
-            IoAndStatusController(), UrConfigurationController(), DashboardClient(), SimulatedInputs()]
+            IoAndStatusController(), UrConfigurationController(), DashboardClient(), SimulatedInputs(),
+            ForceTorqueSensorBroadcaster(), RobotStatePublisher()]
         for component in self.components:
             component.configure(self.host)
             component.activate()
@@ -245,6 +243,7 @@ class UrSimNode(Node):
             ended = [self._controller_stopper(state.q)]
             sample, outcome = self.jtc.update(state.t, self.sim.control_dt, state.q, state.qd)
             tcp_position, tcp_orientation = self.sim.tcp_pose()
+            wrench = self.sim.wrench()
             tau = self.sim.advance(state, sample, self.jtc.stop)
             ended.append(outcome)
             cause = self._safety_check(sample)
@@ -257,7 +256,7 @@ class UrSimNode(Node):
             robot_factor, total_factor = self.jtc.scaling.factor, self.jtc.scaling.total
         self.gateway.set_sim_time(self.sim.time)
         cycle = Cycle(self._cycle, state.t, conv.sec_to_time(state.t), state, sample, tau, robot_factor,
-                      total_factor, tcp_position, tcp_orientation)
+                      total_factor, tcp_position, tcp_orientation, wrench)
         for component in self.components:
             if component.active:
                 component.update(cycle)

@@ -1,4 +1,5 @@
-"""MuJoCo stepping of a UR arm: indices resolved once by name, torques in, joint state and TCP pose out."""
+"""MuJoCo stepping of a UR arm: indices resolved once by name, torques in, joint state, TCP pose and the
+flange's force-torque sensor out; the payload's mass properties changed at run time."""
 from __future__ import annotations
 
 from dataclasses import dataclass
@@ -37,10 +38,12 @@ class ArmPhysics:
         substeps: physics steps per control period; the physics timestep is control_dt / substeps.
         base_body: body whose frame TCP poses are expressed in (the UR `base` frame).
         tcp_site: site at the TCP (tool0).
+        payload_body: massless body fixed at tool0 whose mass properties :meth:`set_payload` sets.
+        ft_sensors: names of the force and the torque sensor at the tool0 site.
     """
 
     def __init__(self, mjcf_xml: str, joint_names: tuple[str, ...], control_dt: float, substeps: int,
-                 base_body: str, tcp_site: str) -> None:
+                 base_body: str, tcp_site: str, payload_body: str, ft_sensors: tuple[str, str]) -> None:
         self.model = mujoco.MjModel.from_xml_string(mjcf_xml)
         self.model.opt.timestep = control_dt / substeps
         self.data = mujoco.MjData(self.model)
@@ -63,6 +66,9 @@ class ArmPhysics:
         self._tcp = lookup(mujoco.mjtObj.mjOBJ_SITE, tcp_site, 'site')
         self._mass = np.zeros((m.nv, m.nv))
         self._mass_index = np.ix_(self._dof, self._dof)
+        self._payload = lookup(mujoco.mjtObj.mjOBJ_BODY, payload_body, 'body')
+        sensors = [lookup(mujoco.mjtObj.mjOBJ_SENSOR, s, 'sensor') for s in ft_sensors]
+        self._ft = np.concatenate([np.arange(m.sensor_adr[s], m.sensor_adr[s] + 3) for s in sensors])
         # Per geom, once: which belong to the robot (the subtree of the base body's root, i.e. arm and tool)
         # and the name a contact report uses (the body, or the geom for bodies fixed to the world).
         root = int(m.body_rootid[self._base])
@@ -146,3 +152,27 @@ class ArmPhysics:
         wxyz = np.zeros(4)
         mujoco.mju_mat2Quat(wxyz, r.reshape(9))
         return p, np.array([wxyz[1], wxyz[2], wxyz[3], wxyz[0]])
+
+    def wrench(self) -> np.ndarray:
+        """(6,) force [N] and torque [N m] that the bodies beyond tool0 (tool, payload) exert on the arm,
+        about the tool0 origin, in tool0 axes, as of the last physics step.
+
+        MuJoCo's force and torque sensors give the opposite: what the parent (the arm) exerts on the
+        sensor's body and its subtree. Weight, contacts and the subtree's inertia all appear in it.
+        """
+        return -self.data.sensordata[self._ft]
+
+    def set_payload(self, mass: float, cog: np.ndarray, moments: np.ndarray, quat: np.ndarray) -> None:
+        """Give the payload body `mass` [kg] with its centre at `cog` (3,) [m] in tool0 and principal
+        moments `moments` (3,) [kg m^2] along axes oriented by `quat` (w, x, y, z) in tool0."""
+        m, b = self.model, self._payload
+        m.body_mass[b] = mass
+        m.body_ipos[b] = cog
+        m.body_inertia[b] = moments
+        m.body_iquat[b] = quat
+        # Derived model constants (subtree masses, inverse weights used by the constraint solver, whether
+        # the inertial frame equals the body frame) follow the new values only through mj_setConst. It
+        # evaluates the model at qpos0 in the data it is given: a scratch one, so the state is untouched.
+        mujoco.mj_setConst(m, mujoco.MjData(m))
+        # The invariant of step(): M, h and the poses are those of the current state (now with the payload).
+        mujoco.mj_step1(m, self.data)

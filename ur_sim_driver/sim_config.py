@@ -52,6 +52,7 @@ class SimConfig:
     stopped_velocity_tolerance: float = 0.2
     goal_time: float = 0.0
     constraints: tuple[JointConstraint, ...] = (JointConstraint(),) * 6
+    publish_frequency: float = 20.0  # [Hz] of simulated time: robot_state_publisher's /tf
 
     def prefixed(self, name: str) -> str:
         """`name` under the configured namespace, e.g. '/ur10/joint_states'."""
@@ -149,6 +150,8 @@ def sim_config_from_params(params: Mapping[str, Any]) -> SimConfig:
                                            get('constraints.stopped_velocity_tolerance', 0.2), 0.0, 10.0),
         goal_time=_number('constraints.goal_time', get('constraints.goal_time', 0.0), 0.0, 3600.0),
         constraints=tuple(constraints),
+        publish_frequency=_number('publish_frequency', get('publish_frequency', d.publish_frequency), 0.0, 1000.0,
+                                  lo_open=True),
     )
 
 

@@ -5,13 +5,14 @@ import math
 
 import numpy as np
 
-from ur_sim_driver.description.mjcf import add_static_mesh, build_mjcf
+from ur_sim_driver.description.mjcf import FT_FORCE_SENSOR, FT_TORQUE_SENSOR, PAYLOAD_BODY, add_static_mesh, build_mjcf
 from ur_sim_driver.description.params import joint_names as model_joint_names
 from ur_sim_driver.description.params import load_ur_params
 from ur_sim_driver.description.tool import get_tool
 from ur_sim_driver.description.urdf import build_urdf
 from ur_sim_driver.errors import ConfigError
 from ur_sim_driver.io_bank import IoBank
+from ur_sim_driver.payload import NO_PAYLOAD, Payload, make_payload
 from ur_sim_driver.physics import ArmPhysics, ArmState
 from ur_sim_driver.scene import load_scene, pose_matrix
 from ur_sim_driver.servo import JointServo, ServoLimits, Setpoint
@@ -54,7 +55,8 @@ class Simulator:
         pre = cfg.tf_prefix
         self.joint_names = tuple(j if j.startswith(pre) else pre + j for j in cfg.joints)
         self.physics = ArmPhysics(xml, model_joint_names(pre), self.control_dt, substeps,
-                                  base_body=f'{pre}base', tcp_site=f'{pre}tool0')
+                                  base_body=f'{pre}base', tcp_site=f'{pre}tool0', payload_body=pre + PAYLOAD_BODY,
+                                  ft_sensors=(pre + FT_FORCE_SENSOR, pre + FT_TORQUE_SENSOR))
         q0 = np.array(cfg.initial_positions)
         bad = np.flatnonzero((q0 < self.params.q_min) | (q0 > self.params.q_max))
         if bad.size:
@@ -68,6 +70,8 @@ class Simulator:
         self.last_setpoint: Setpoint | None = None
         # The robot's IO (immutable; replaced under the simulation lock, read as one snapshot without it).
         self.io = IoBank()
+        self.payload: Payload = NO_PAYLOAD
+        self._ft_offset = np.zeros(6)
 
     @property
     def time(self) -> float:
@@ -102,3 +106,29 @@ class Simulator:
     def tcp_pose(self) -> tuple[np.ndarray, np.ndarray]:
         """tool0 in the base frame: position (3,) [m], quaternion (x, y, z, w)."""
         return self.physics.tcp_pose()
+
+    def set_payload(self, mass: float, cog: np.ndarray, inertia: np.ndarray) -> None:
+        """Mount a payload at the flange (call under the simulation lock).
+
+        Args:
+            mass: [kg] (0: none).
+            cog: (3,) centre of gravity in tool0 [m].
+            inertia: (6,) ixx, iyy, izz, ixy, ixz, iyz about the centre of gravity, tool0 axes [kg m^2].
+
+        Raises:
+            ConfigError: an invalid value (see ``payload.make_payload``); the payload is unchanged then.
+        """
+        payload = make_payload(mass, cog, inertia)
+        moments, quat = payload.principal()
+        self.physics.set_payload(payload.mass, payload.cog, moments, quat)
+        self.payload = payload
+
+    def wrench(self) -> np.ndarray:
+        """(6,) force [N] and torque [N m] measured at the flange, in tool0 axes about the tool0 origin
+        (the driver's tool0_controller frame): what tool, payload and contacts exert on the arm, less the
+        reading at the last :meth:`zero_ftsensor`."""
+        return self.physics.wrench() - self._ft_offset
+
+    def zero_ftsensor(self) -> None:
+        """Take the current reading as the sensor's zero, as the robot's zero_ftsensor does."""
+        self._ft_offset = self.physics.wrench()

@@ -45,6 +45,8 @@ class Cycle:
         total_factor: the factor the scaled JTC advanced its trajectory time by.
         tcp_position: (3,) tool0 in the base frame [m], at `t`.
         tcp_orientation: (4,) tool0 orientation in the base frame, quaternion (x, y, z, w).
+        wrench: (6,) force [N] and torque [N m] of the flange's force-torque sensor in tool0_controller
+            (``Simulator.wrench``), as of the last physics step.
     """
 
     index: int
@@ -57,6 +59,7 @@ class Cycle:
     total_factor: float
     tcp_position: np.ndarray
     tcp_orientation: np.ndarray
+    wrench: np.ndarray
 
 
 @dataclass

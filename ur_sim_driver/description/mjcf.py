@@ -46,6 +46,10 @@ from ur_sim_driver.errors import ConfigError
 _ENV_BITS = ('3', '3')
 _ROBOT_BITS = {True: ('1', '1'), False: ('2', '1')}
 # Pairs in contact by construction (the parent filter does not cover them).
+# Names (after tf_prefix) of the run-time payload body and of the flange force-torque sensor's two halves.
+PAYLOAD_BODY = 'payload'
+FT_FORCE_SENSOR = 'tcp_fts_force'
+FT_TORQUE_SENSOR = 'tcp_fts_torque'
 _EXCLUDES = (('base_link_inertia', 'shoulder_link'), ('forearm_link', 'wrist_2_link'),
              ('wrist_1_link', 'wrist_3_link'))
 
@@ -83,7 +87,9 @@ def build_mjcf(params: URParams, tf_prefix: str = '', tool: ToolDef | None = Non
     ``base_link`` in the world, physics ``timestep`` [s]; a floor plane at world z = 0.
 
     Names: bodies = URDF links, hinges and motors = URDF joints, sites ``tool0`` and the tool
-    tip (all with ``tf_prefix``).
+    tip, the massless body ``payload`` fixed at tool0 (``PAYLOAD_BODY``, for set_payload) and
+    the force and torque sensors at the tool0 site (``FT_FORCE_SENSOR``, ``FT_TORQUE_SENSOR``),
+    all with ``tf_prefix``.
     """
     if not (np.isfinite(timestep) and timestep > 0.0):
         raise ConfigError(f'timestep must be > 0 s, got {timestep!r}')
@@ -122,6 +128,8 @@ def build_mjcf(params: URParams, tf_prefix: str = '', tool: ToolDef | None = Non
                           size=fmt(radius), fromto=fmt(fromto), contype=contype, conaffinity=conaff,
                           rgba='0.6 0.65 0.7 1')
     ET.SubElement(bodies[p + 'tool0'], 'site', name=p + 'tool0', size='0.005')
+    # The payload set at run time (set_payload): massless until then, fixed at tool0.
+    ET.SubElement(bodies[p + 'tool0'], 'body', name=p + PAYLOAD_BODY)
     if tool is not None:
         for g in tool.geoms:
             ET.SubElement(bodies[p + tool.name], 'geom', name=p + g.name, type='cylinder',
@@ -137,6 +145,11 @@ def build_mjcf(params: URParams, tf_prefix: str = '', tool: ToolDef | None = Non
         if j.index is not None:
             lim = fmt([-params.effort_max[j.index], params.effort_max[j.index]])
             ET.SubElement(actuators, 'motor', name=j.name, joint=j.name, gear='1', ctrlrange=lim, forcerange=lim)
+    # The flange's force-torque sensor: what the subtree beyond tool0 (tool, payload, their contacts)
+    # exchanges with the arm, at and in the tool0 site.
+    sensors = ET.SubElement(root, 'sensor')
+    ET.SubElement(sensors, 'force', name=p + FT_FORCE_SENSOR, site=p + 'tool0')
+    ET.SubElement(sensors, 'torque', name=p + FT_TORQUE_SENSOR, site=p + 'tool0')
     ET.indent(root)
     return ET.tostring(root, encoding='unicode') + '\n'
 
