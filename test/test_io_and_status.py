@@ -14,6 +14,7 @@ from geometry_msgs.msg import Vector3
 from sim_harness import point, running_sim, wait_for
 from std_msgs.msg import Bool, Float64
 from std_srvs.srv import Trigger
+from test_payload import pinocchio_gravity
 from ur_dashboard_msgs.msg import RobotMode, SafetyMode
 from ur_msgs.msg import Analog, IOStates, ToolDataMsg
 from ur_msgs.srv import GetRobotSoftwareVersion, SetAnalogOutput, SetIO, SetPayload, SetSpeedSliderFraction
@@ -21,7 +22,6 @@ from ur_msgs.srv import GetRobotSoftwareVersion, SetAnalogOutput, SetIO, SetPayl
 from ur_sim_driver import result_codes as rc
 from ur_sim_driver.controllers.io_and_status import payload_refusal
 from ur_sim_driver.robot_state import IDLE, NORMAL, POWER_OFF, POWER_ON, PROTECTIVE_STOP, RUNNING
-from ur_sim_driver.simulator import Simulator
 
 IO = '/io_and_status_controller'
 
@@ -267,21 +267,40 @@ def test_speed_slider_scales_the_reported_factor_and_slows_a_trajectory():
         wait_for(lambda: scaling.last.data == pytest.approx(100.0), what='speed scaling 100 %')
 
 
-def test_payload_and_ftsensor_services_validate_then_reach_the_simulator():
-    with running_sim(ur_type='ur10e') as h:
-        def payload(mass, cog=(0.0, 0.0, 0.1), inertia=(0.01, 0.01, 0.02)):
+def test_set_payload_over_dds_changes_efforts_by_its_gravity_torque_and_the_wrench_by_its_weight():
+    # The driver's payload test calls set_payload several times in a row: every one succeeds.
+    pose = [0.4, -1.1, 1.2, -0.6, 1.0, 0.3]
+    load = dict(mass=3.0, cog=np.array([0.02, -0.03, 0.08]), inertia=np.array([0.012, 0.015, 0.009, 0.0, 0.0, 0.0]))
+    with running_sim(ur_type='ur10e', initial_positions=pose) as h:
+        def payload(mass, cog=(0.0, 0.0, 0.1), inertia=(0.01, 0.01, 0.02, 0.0, 0.0, 0.0)):
             req = SetPayload.Request(mass=float(mass), center_of_gravity=Vector3(x=cog[0], y=cog[1], z=cog[2]),
-                                     ixx=inertia[0], iyy=inertia[1], izz=inertia[2])
+                                     ixx=inertia[0], iyy=inertia[1], izz=inertia[2], ixy=inertia[3],
+                                     ixz=inertia[4], iyz=inertia[5])
             return call(h, SetPayload, f'{IO}/set_payload', req).success
 
         assert not payload(12.6)  # above the UR10e's 12.5 kg
         assert not payload(-0.5)
-        assert not payload(1.0, inertia=(0.01, -0.01, 0.02))
-        # Accepted requests reach Simulator.set_payload / zero_ftsensor; without them the answer is false.
-        has_payload, has_zero = hasattr(Simulator, 'set_payload'), hasattr(Simulator, 'zero_ftsensor')
-        assert payload(12.5) is has_payload
-        assert payload(0.0, cog=(0.0, 0.0, 0.0), inertia=(0.0, 0.0, 0.0)) is has_payload
+        assert not payload(1.0, inertia=(0.01, -0.01, 0.02, 0.0, 0.0, 0.0))
+        assert not payload(1.0, inertia=(0.01, 0.01, 0.5, 0.0, 0.0, 0.0))  # no rigid body has it
+        for mass in (1.0, 2.0, 0.0):
+            assert payload(mass)
+
+        def at_rest():
+            h.wait_sim_time(1.0)
+            rec = h.record()
+            h.wait_sim_time(0.1)
+            h.stop_recording()
+            return np.array(rec.effort[-1])
+
+        before = at_rest()
         zero = trigger(h, 'zero_ftsensor')
-        assert zero.success is has_zero
-        if not has_zero:
-            assert 'zero_ftsensor' in zero.message
+        assert zero.success, zero.message
+        assert payload(load['mass'], load['cog'], load['inertia'])
+        after = at_rest()
+        expected = pinocchio_gravity(h.sim.sim.urdf, pose, load) - pinocchio_gravity(h.sim.sim.urdf, pose)
+        err = np.abs((after - before) - expected).max() / np.abs(expected).max()
+        assert err < 0.01, (after - before, expected)
+        # zeroed before: the sensor now reads the payload's weight alone
+        with h.sim.host.lock:
+            wrench = h.sim.sim.wrench()
+        assert np.linalg.norm(wrench[:3]) == pytest.approx(3.0 * 9.81, rel=0.01)

@@ -38,6 +38,7 @@ from ur_msgs.msg import Analog, Digital, IOStates, ToolDataMsg
 from ur_msgs.srv import SetAnalogOutput, SetIO, SetPayload, SetSpeedSliderFraction
 
 from ur_sim_driver.controllers.base import Component, Cycle, Host
+from ur_sim_driver.errors import ConfigError
 from ur_sim_driver.io_bank import (
     IoBank,
     analog_out_refusal,
@@ -215,12 +216,6 @@ class IoAndStatusController(Component):
     def _on_hand_back_control(self, req: Trigger.Request, res: Trigger.Response) -> Trigger.Response:
         return self._robot_command(self.host.robot.hand_back_control, 'Deactivated control', res)
 
-    def _sim_method(self, name: str) -> Callable | None:
-        method = getattr(self.host.sim, name, None)
-        if method is None:
-            self.node.get_logger().error(f'refused: this simulator has no {name}() yet')
-        return method
-
     def _on_set_payload(self, req: SetPayload.Request, res: SetPayload.Response) -> SetPayload.Response:
         cog = np.array([req.center_of_gravity.x, req.center_of_gravity.y, req.center_of_gravity.z])
         inertia = np.array([req.ixx, req.iyy, req.izz, req.ixy, req.ixz, req.iyz])
@@ -231,21 +226,18 @@ class IoAndStatusController(Component):
         if reason is not None:
             self.node.get_logger().error(f'refused: {reason}')
             return res
-        set_payload = self._sim_method('set_payload')
-        if set_payload is None:
+        try:
+            with self.host.lock:
+                self.host.sim.set_payload(mass, cog, inertia)
+        except ConfigError as exc:  # what the physics cannot take (e.g. an inertia that is no rigid body's)
+            self.node.get_logger().error(f'refused: {exc}')
             return res
-        with self.host.lock:
-            set_payload(mass, cog, inertia)
         self.node.get_logger().info(f'payload set: {mass} kg at {cog.tolist()} m')
         res.success = True
         return res
 
     def _on_zero_ftsensor(self, req: Trigger.Request, res: Trigger.Response) -> Trigger.Response:
-        zero = self._sim_method('zero_ftsensor')
-        if zero is None:
-            res.success, res.message = False, 'this simulator has no force-torque sensor yet (zero_ftsensor)'
-            return res
         with self.host.lock:
-            zero()
+            self.host.sim.zero_ftsensor()
         res.success, res.message = True, 'Successfully zeroed the force torque sensor'
         return res
