@@ -85,11 +85,10 @@ class SwitchPlan:
 
     @property
     def message(self) -> str:
-        """The response's message: the errors (else the warnings) of the request, or its success."""
-        for level in ('error', 'warn'):
-            lines = [line.text for line in self.log if line.level == level]
-            if lines:
-                return ' '.join(lines)
+        """The response's message: the warnings and errors about the request, in order, or its success."""
+        lines = [line.text for line in self.log if line.level != 'info']
+        if lines:
+            return ' '.join(lines)
         return SWITCHED if self.ok and (self.activate or self.deactivate) else EMPTY_SWITCH
 
 

@@ -122,7 +122,13 @@ class ControllerManagerNode:
         plan = self.manager.plan(activate, deactivate, strictness)
         logger = self.node.get_logger()
         for line in plan.log:
-            {'info': logger.info, 'warn': logger.warning, 'error': logger.error}[line.level](line.text)
+            # One call site per severity: rclpy refuses a call site whose severity changes.
+            if line.level == 'error':
+                logger.error(line.text)
+            elif line.level == 'warn':
+                logger.warning(line.text)
+            else:
+                logger.info(line.text)
         if plan.ok and (plan.activate or plan.deactivate):
             for name in plan.deactivate:
                 self.components[name].deactivate()
