@@ -8,8 +8,6 @@ from sim_harness import SimHarness, wait_for
 
 STRICT = SwitchController.Request.STRICT
 BEST_EFFORT = SwitchController.Request.BEST_EFFORT
-MOTION_CONTROLLERS = ['scaled_joint_trajectory_controller', 'joint_trajectory_controller', 'forward_position_controller',
-                      'forward_velocity_controller', 'passthrough_trajectory_controller', 'freedrive_mode_controller']
 
 
 class ControllerManagerClient:

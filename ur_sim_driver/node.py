@@ -164,6 +164,11 @@ class UrSimNode(Node):
         if controller is None:  # only a bug gets here: the gateway serves exactly these controllers
             self.get_logger().error(f'gateway message for unknown controller {message.controller!r}')
             return
+        with self._lock:
+            # A robot state changed since the last cycle (a dashboard call) is seen now, as the driver's
+            # controller_stopper would have seen it before this message arrived.
+            self.robot.update(self.sim.time)
+            self._controller_stopper()
         controller.on_gateway(message)
 
     # ---- simulation loop (own thread) ------------------------------------------------------------

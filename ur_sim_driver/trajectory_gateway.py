@@ -19,6 +19,7 @@ import signal
 import struct
 import sys
 import threading
+import time
 from multiprocessing.connection import Connection
 
 import rclpy
@@ -55,10 +56,12 @@ from ur_sim_driver.validation import validate_trajectory
 LARGE_TRAJECTORY = 10_000
 # A start stamp this far ahead of the simulated clock is accepted (upstream does) but logged [s].
 FAR_FUTURE = 5.0
+# How long a goal to an inactive controller waits for an activation in flight before it is rejected [s].
+ACTIVATION_GRACE = 0.05
 _SHUTDOWN = Ended(None, result_codes.INVALID_GOAL, 'ur_sim is shutting down.')
 # Upstream JTC's words while it is inactive (goals; topic messages).
 INACTIVE_GOAL = "Can't accept new action goals. Controller is not running."
-INACTIVE_TOPIC = "Can't accept new commands. subscriber is inactive"
+INACTIVE_TOPIC = "Can't accept new commands. subscriber is inactive"  # (logged by the simulation side)
 
 
 class _Waiter:
@@ -104,6 +107,14 @@ class TrajectoryGateway:
         node.create_subscription(JointTrajectory, f'{base}/joint_trajectory', self._on_topic, 10,
                                  callback_group=ordered, raw=True)
 
+    def _wait_active(self, timeout: float) -> bool:
+        """Whether the controller is active, allowing an activation already on its way through the pipe (the
+        controller_stopper restores a controller in the cycle after the robot can move again) to arrive."""
+        deadline = time.monotonic() + timeout
+        while not self.active and time.monotonic() < deadline:
+            time.sleep(0.002)
+        return self.active
+
     @property
     def refusal(self) -> str | None:
         return self._shared.refusal
@@ -130,7 +141,7 @@ class TrajectoryGateway:
         cmd = from_points(traj.joint_names, conv.time_to_sec(traj.header.stamp), traj.points)
         # Upstream's JTC rejects goals while inactive, and the controller_stopper deactivates it while the robot
         # cannot move. (Topic messages are refused by the simulation, which knows the state without delay.)
-        if not self.active:
+        if not self._wait_active(ACTIVATION_GRACE):
             self.node.get_logger().error(INACTIVE_GOAL)
             return GoalResponse.REJECT
         reason = None if self.refusal is None else f'the controller is not running: {self.refusal}'
@@ -159,9 +170,8 @@ class TrajectoryGateway:
         goal_handle.execute()
 
     def _on_topic(self, data: bytes) -> None:
-        if not self.active:
-            self.node.get_logger().warning(INACTIVE_TOPIC)
-            return
+        # Whether the controller is active is decided by the simulation, which knows it without delay (a message
+        # right after the robot can move again meets the controller that the controller_stopper restores).
         try:
             cmd = parse_joint_trajectory(data)
         except TrajectoryError as exc:

@@ -87,16 +87,13 @@ class ForwardCommandController(JointCommandController):
 
     # ---- simulation loop, under the lock --------------------------------------------------------------------------
     def on_activate(self) -> None:
-        self._target = None
         self.stop_reason = None
+        self._target = None
+        self._r = self.host.sim.state().q.copy()  # the hardware starts from the measured position, at rest
+        self._rd = np.zeros_like(self._r)
 
     def on_deactivate(self) -> None:
         self._target = None
-
-    def take_over(self, state: ArmState) -> None:
-        self._target = None
-        self._r = state.q.copy()
-        self._rd = np.zeros_like(state.q)
 
     def command(self, state: ArmState, period: float) -> tuple[TrajectorySample, np.ndarray | None]:
         zero = np.zeros_like(state.q)

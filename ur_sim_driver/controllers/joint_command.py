@@ -20,7 +20,8 @@ class JointCommander:
     """The commanding half of a controller (or the robot's own hold)."""
 
     def take_over(self, state: ArmState) -> None:
-        """It commands the robot from this cycle on; `state` is the measured state now (under the lock)."""
+        """It commands the robot from this cycle on; `state` is the measured state now (under the lock).
+        (Controllers set themselves up in their activate hook, which may run between cycles.)"""
 
     def command(self, state: ArmState, period: float) -> tuple[TrajectorySample, np.ndarray | None]:
         """One control cycle under the lock: (the reference for the robot's servo, the stop position or None).

@@ -91,6 +91,7 @@ class JointTrajectoryControllerComponent(JointCommandController):
     # ---- lifecycle (simulation loop, under the lock) --------------------------------------------------------------
     def on_activate(self) -> None:
         self.stop_reason = None
+        self.core.hold(self.host.sim.state().q)  # upstream holds the current position on activation
         self._settled = self._link.activation(self.name, True)
 
     def on_deactivate(self) -> None:
@@ -107,9 +108,6 @@ class JointTrajectoryControllerComponent(JointCommandController):
         """Wait until the gateway applied the last switch of this controller (False on timeout)."""
         event = self._settled
         return event is None or event.wait(timeout)
-
-    def take_over(self, state: ArmState) -> None:
-        self.core.hold(state.q)
 
     def command(self, state: ArmState, period: float) -> tuple[TrajectorySample, np.ndarray | None]:
         sample, outcome = self.core.update(state.t, period, state.q, state.qd)
@@ -163,7 +161,7 @@ class JointTrajectoryControllerComponent(JointCommandController):
                 if message.token is not None:
                     self._finish(Outcome(message.token, result_codes.INVALID_GOAL, refusal))
                 else:
-                    self.node.get_logger().error(f'Dropped JointTrajectory message: {refusal}')
+                    self.node.get_logger().warning(f'Dropped JointTrajectory message: {refusal}')
                 return
             if preempted is not None:
                 self._finish(preempted)
