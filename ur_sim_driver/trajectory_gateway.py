@@ -141,11 +141,13 @@ class TrajectoryGateway:
         cmd = from_points(traj.joint_names, conv.time_to_sec(traj.header.stamp), traj.points)
         # Upstream's JTC rejects goals while inactive, and the controller_stopper deactivates it while the robot
         # cannot move. (Topic messages are refused by the simulation, which knows the state without delay.)
-        if not self._wait_active(ACTIVATION_GRACE):
-            self.node.get_logger().error(INACTIVE_GOAL)
-            return GoalResponse.REJECT
-        reason = None if self.refusal is None else f'the controller is not running: {self.refusal}'
-        reason = reason or self._validate(cmd, 'FollowJointTrajectory goal')
+        refusal = self.refusal
+        if refusal is not None:  # deactivated by the controller_stopper: name the robot's state
+            reason = f'the controller is not running: {refusal}'
+        elif not self._wait_active(ACTIVATION_GRACE):
+            reason = INACTIVE_GOAL
+        else:
+            reason = self._validate(cmd, 'FollowJointTrajectory goal')
         if reason is None and goal.multi_dof_trajectory.points:
             reason = 'multi_dof_trajectory is not supported by this controller (it has no multi-DOF joints)'
         if reason is not None:

@@ -148,10 +148,10 @@ class JointTrajectoryControllerComponent(JointCommandController):
             preempted = None
             with host.lock:
                 refusal = host.robot.motion_refusal()
-                if not self.active:
-                    refusal = INACTIVE_GOAL if message.token is not None else INACTIVE_TOPIC
-                elif refusal is not None:
+                if refusal is not None:  # the controller_stopper keeps it inactive: say why
                     refusal = f'the controller is not running: {refusal}'
+                elif not self.active:
+                    refusal = INACTIVE_GOAL if message.token is not None else INACTIVE_TOPIC
                 else:
                     state = host.sim.state()
                     preempted = self.core.start(points, state.t, state.q, state.qd, token=message.token,
