@@ -160,6 +160,16 @@ def test_a_short_pulse_never_opens_the_valve() -> None:
     assert total == 0.0 and state.idle
 
 
+def test_a_run_starts_with_the_first_material() -> None:
+    # Output on at t = 0 with a 50 ms delay while the tip moves at 0.1 m/s: the bead starts where the tip
+    # was in the last cycle without flow, 25 cycles (50 ms) later, and no earlier.
+    p = DispenserParams(on_delay=0.05, off_delay=0.0, time_constant=0.0)
+    track, _ = lay(p, track_at([0.1] * 100), [True] * 101)
+    bead = track.bead()
+    assert bead.times[0] == pytest.approx(0.05, abs=1e-12) and bead.points[0, 0] == pytest.approx(0.005)
+    assert track.deposited == pytest.approx(p.rate * (100 * DT - 0.05), rel=1e-12)
+
+
 def test_no_surface_loses_the_material() -> None:
     track = BeadTrack(0.006)
     track.add(0.0, np.zeros(3), 1e-6)

@@ -23,10 +23,13 @@ from __future__ import annotations
 
 from collections.abc import Sequence
 from dataclasses import dataclass
+from typing import TYPE_CHECKING
 
 import numpy as np
-from builtin_interfaces.msg import Time
-from sensor_msgs.msg import PointCloud2, PointField
+
+if TYPE_CHECKING:  # the message types are imported where used: the pure model (dispenser.py) needs no ROS
+    from builtin_interfaces.msg import Time
+    from sensor_msgs.msg import PointCloud2
 
 # ur_sim's ``base`` frame in the MuJoCo world for an arm at the origin (base_link = world; base = Rz(pi)).
 BASE_IN_WORLD = np.diag([-1.0, -1.0, 1.0, 1.0])
@@ -35,8 +38,9 @@ GAP = 0.005  # [m] consecutive points farther apart than this are drawn unconnec
 # The cloud's point layout: 5 float32 then the float64 time, 28 bytes, no padding.
 CLOUD_DTYPE = np.dtype([('x', '<f4'), ('y', '<f4'), ('z', '<f4'), ('width', '<f4'), ('height', '<f4'),
                         ('t', '<f8')])
-_FIELD_TYPES = {PointField.FLOAT32: '<f4', PointField.FLOAT64: '<f8'}
-_NP_TO_FIELD = {np.dtype('<f4'): PointField.FLOAT32, np.dtype('<f8'): PointField.FLOAT64}
+_FLOAT32, _FLOAT64 = 7, 8  # sensor_msgs/PointField datatypes
+_FIELD_TYPES = {_FLOAT32: '<f4', _FLOAT64: '<f8'}
+_NP_TO_FIELD = {np.dtype('<f4'): _FLOAT32, np.dtype('<f8'): _FLOAT64}
 
 
 @dataclass(frozen=True, eq=False)
@@ -70,6 +74,8 @@ class Bead:
 
 def to_cloud(bead: Bead, frame_id: str, stamp: Time) -> PointCloud2:
     """The bead as a PointCloud2 (fields x, y, z, width, height float32 [m], t float64 [s])."""
+    from sensor_msgs.msg import PointCloud2, PointField
+
     rows = np.empty(len(bead), dtype=CLOUD_DTYPE)
     for axis, name in enumerate('xyz'):
         rows[name] = bead.points[:, axis]

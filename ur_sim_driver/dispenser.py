@@ -90,6 +90,8 @@ class DispenserParams:
                                       ('on_delay', 0.0, 10.0, False), ('off_delay', 0.0, 10.0, False),
                                       ('time_constant', 0.0, 10.0, False)):
             value = getattr(self, name)
+            if isinstance(value, bool) or not isinstance(value, (int, float)):
+                raise ConfigError(f"parameter 'dispenser.{name}' = {value!r} is not a number")
             ok = isinstance(value, (int, float)) and not isinstance(value, bool) and math.isfinite(value) and \
                 (value > lo if open_lo else value >= lo) and value <= hi
             if not ok:
@@ -188,6 +190,7 @@ class BeadTrack:
         self._run = np.zeros(1024, dtype=np.int64)
         self._runs = 0
         self._open = False  # whether the next deposit continues the last run
+        self._start: tuple[np.ndarray, float] | None = None  # the last point seen while nothing flowed
         self.deposited = 0.0  # [m^3]
         self.lost = 0.0  # [m^3] that found no surface
 
@@ -206,27 +209,40 @@ class BeadTrack:
 
     def add(self, t: float, point: np.ndarray | None, volume: float) -> None:
         """Material ``volume`` [m^3] that left the nozzle during the cycle ending at ``t`` [s], landing on the
-        way to ``point`` (3,) [m] (None: no surface within reach: lost, and the run ends)."""
+        way to ``point`` (3,) [m] (None: no surface within reach: lost, and the run ends).
+
+        A run starts with the first material: at the point of the cycle before (when given with no volume,
+        as the simulator does from the cycle the output is seen on) or else at ``point`` itself.
+        """
         if point is None:
             self.lost += volume
-            self._open = False
+            self._open, self._start = False, None
             return
         point = np.asarray(point, dtype=float)
         n = self._n
         if self._open and float(np.linalg.norm(point - self._p[n - 1])) <= MAX_JUMP:
             s = self._s[n - 1] + float(np.linalg.norm(point - self._p[n - 1]))
             self._append(s, self._v[n - 1] + volume, point, t)
-        else:  # a new run: its first cycle's material lands at its first point
-            s = (self._runs * _RUN_SEPARATION)
+        elif volume <= 0.0:  # nothing flows yet: where the tip was, in case the next cycle's material starts there
+            self._start = (point, t)
+            return
+        else:  # a new run, from where the tip was in the last cycle without material if that is near
+            s = self._runs * _RUN_SEPARATION
             self._runs += 1
-            self._append(s, self.deposited, point, t)
+            start = self._start
+            if start is not None and float(np.linalg.norm(point - start[0])) <= MAX_JUMP:
+                self._append(s, self.deposited, start[0], start[1])
+                s += float(np.linalg.norm(point - start[0]))
+            else:  # the cycle's material lands at the first point
+                self._append(s, self.deposited, point, t)
             self._append(s, self.deposited + volume, point, t)
             self._open = True
+        self._start = None
         self.deposited += volume
 
     def end_run(self) -> None:
         """The flow has stopped: the next deposit starts a new run."""
-        self._open = False
+        self._open, self._start = False, None
 
     def bead(self) -> Bead:
         """The bead laid so far: points every ``POINT_SPACING`` of track and at each run's end."""
@@ -273,3 +289,21 @@ def _widths(q: np.ndarray, s: np.ndarray, v: np.ndarray, nozzle: float) -> np.nd
         g = np.sqrt(2.0 * np.maximum(dv, 0.0) / (ASPECT * window))
         w = np.sqrt(w * g)  # damped: a blob's fixed point is approached from both sides
     return w
+
+
+def dispenser_params(params: dict) -> DispenserParams:
+    """DispenserParams from the flat ``dispenser.*`` entries of ``params`` (others are ignored).
+
+    Raises:
+        ConfigError: an unknown ``dispenser.*`` key (naming the valid ones) or a bad value.
+    """
+    fields = DispenserParams.__dataclass_fields__
+    given = {k.split('.', 1)[1]: v for k, v in params.items() if k.startswith('dispenser.')}
+    unknown = sorted(set(given) - set(fields))
+    if unknown:
+        raise ConfigError(f"parameter 'dispenser.{unknown[0]}' is unknown; valid names: "
+                          f"{', '.join('dispenser.' + f for f in fields)}")
+    # YAML and ROS give whole numbers as integers: keep the floats floats.
+    given = {k: float(v) if k != 'pin' and isinstance(v, int) and not isinstance(v, bool) else v
+             for k, v in given.items()}
+    return DispenserParams(**given)
