@@ -117,7 +117,7 @@ class SimulatedDispenser(Component):
             self.node.get_logger().warning(f'glue lost: no surface within {MAX_STANDOFF * 1e3:.0f} mm of the '
                                            'nozzle along its axis')
         if changed or self._state.idle or (cycle.t >= self._next_sim and time.monotonic() >= self._next_wall):
-            self._publish(cycle)
+            self._publish(cycle, force=changed)
         if self._state.idle:
             with self._lock:
                 deposited, lost = self._track.deposited, self._track.lost
@@ -137,10 +137,11 @@ class SimulatedDispenser(Component):
             return None
         return tip_base + (dist - RAY_BACKSET) * axis_base
 
-    def _publish(self, cycle: Cycle) -> None:
+    def _publish(self, cycle: Cycle, force: bool = False) -> None:
+        # A message on every output change, stamped with the cycle that saw it, even if the bead is unchanged.
         with self._lock:
             n = len(self._track)
-            if n == self._published_len:
+            if n == self._published_len and not force:
                 return
             bead = self._track.bead()
         self._pub.publish(to_cloud(bead, self.frame_id, cycle.stamp))
