@@ -116,6 +116,7 @@ class DashboardClient(Component):
 
     name = 'dashboard_client'
     type_name = 'ur_robot_driver/dashboard_client'  # a node of the driver, not a controller
+    is_controller = False
 
     def __init__(self) -> None:
         super().__init__()

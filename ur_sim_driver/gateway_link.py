@@ -1,13 +1,18 @@
 """The link between the simulation process and the trajectory controller's interface process.
 
-The scaled JTC's action server and joint_trajectory subscription live in a process of their own
+The trajectory controllers' action servers and joint_trajectory subscriptions live in a process of their own
 (``trajectory_gateway.py``), so that receiving and converting a large trajectory (rclpy deserializes an action
 goal in C while holding the GIL: about 1 s per 100,000 points here) never stops the simulation loop, which must
 publish every 2 ms. The two processes exchange the small messages below over a pipe, in order:
 
-* gateway -> simulation: :class:`Start` (a validated trajectory, in the sender's joint order), :class:`Cancel`;
+* gateway -> simulation: :class:`Start` (a validated trajectory, in the sender's joint order), :class:`Cancel`,
+  :class:`Ack` (an :class:`Activation` has been applied);
 * simulation -> gateway: :class:`Ended` (a goal's outcome), :class:`Canceled` (the answer to a Cancel),
-  :class:`Feedback`, :class:`Gate` (whether the controller may take commands now).
+  :class:`Feedback`, :class:`Gate` (whether the robot may take commands now), :class:`Activation` (a controller
+  was switched by the controller manager).
+
+One gateway process serves every trajectory controller (each a node of its own there); Start, Cancel and
+Activation name the controller, the other messages follow the goal's token.
 
 The simulated time is shared through a double in shared memory, written by the simulation every cycle and read
 by the gateway's validation (stamps in the past, stamps far in the future).
@@ -39,10 +44,11 @@ from ur_sim_driver.trajectory_types import SegmentTolerances
 
 @dataclass(frozen=True)
 class GatewayConfig:
-    """What the gateway process needs to serve the controller's interfaces (picklable).
+    """What the gateway process needs to serve the controllers' interfaces (picklable).
 
     Attributes:
-        node_name: the controller's name (its node, as in ros2_control).
+        controllers: the trajectory controllers' names (each its own node, as in ros2_control).
+        active: the names of those active at start.
         namespace: namespace of every interface ('' or '/ur10').
         joints: n controller joint names (with the tf_prefix).
         q_min, q_max, v_max: (n,) joint limits [rad], [rad/s], used only with `strict_limits`.
@@ -52,7 +58,8 @@ class GatewayConfig:
         defaults: the controller's default tolerances (resolved with each goal's in the gateway).
     """
 
-    node_name: str
+    controllers: tuple[str, ...]
+    active: tuple[str, ...]
     namespace: str
     joints: tuple[str, ...]
     q_min: np.ndarray
@@ -66,18 +73,36 @@ class GatewayConfig:
 
 @dataclass(frozen=True, eq=False)
 class Start:
-    """Replace the active trajectory. `token` names an action goal; None for a topic message."""
+    """Replace `controller`'s active trajectory. `token` names an action goal; None for a topic message."""
 
     token: bytes | None
     command: CommandArrays
     tolerances: SegmentTolerances | None
+    controller: str = ''
 
 
 @dataclass(frozen=True)
 class Cancel:
-    """The client asked to cancel goal `token`."""
+    """The client asked `controller` to cancel goal `token`."""
 
     token: bytes
+    controller: str = ''
+
+
+@dataclass(frozen=True)
+class Activation:
+    """`controller` was activated (`active`) or deactivated; the gateway answers :class:`Ack` with `seq`."""
+
+    controller: str
+    active: bool
+    seq: int
+
+
+@dataclass(frozen=True)
+class Ack:
+    """The gateway applied the :class:`Activation` numbered `seq`."""
+
+    seq: int
 
 
 @dataclass(frozen=True)
@@ -127,6 +152,8 @@ class GatewayLink:
         on_message: called in the receiving thread for every :class:`Start` and :class:`Cancel`.
     """
 
+    _seq = 0
+
     def __init__(self, config: GatewayConfig, on_message: Callable[[object], None]) -> None:
         parent_end, child_end = socket.socketpair()
         time_fd = os.memfd_create('ur_sim_time')
@@ -144,6 +171,8 @@ class GatewayLink:
         self._on_message = on_message
         self._outbox: queue.SimpleQueue = queue.SimpleQueue()
         self._closed = threading.Event()
+        self._acks: dict[int, threading.Event] = {}
+        self._acks_lock = threading.Lock()
         self._receiver = threading.Thread(target=self._receive, name='gateway_receive', daemon=True)
         self._sender = threading.Thread(target=self._send, name='gateway_send', daemon=True)
         self._receiver.start()
@@ -156,6 +185,16 @@ class GatewayLink:
     def send(self, message: object) -> None:
         """Queue a message for the gateway; never blocks (the simulation loop calls this)."""
         self._outbox.put(message)
+
+    def activation(self, controller: str, active: bool) -> threading.Event:
+        """Tell the gateway that `controller` was switched; the event is set once it has applied that."""
+        event = threading.Event()
+        with self._acks_lock:
+            self._seq += 1
+            seq = self._seq
+            self._acks[seq] = event
+        self.send(Activation(controller, active, seq))
+        return event
 
     def _send(self) -> None:
         while True:
@@ -173,6 +212,12 @@ class GatewayLink:
                 message = self._conn.recv()
             except (OSError, EOFError):
                 return
+            if isinstance(message, Ack):
+                with self._acks_lock:
+                    event = self._acks.pop(message.seq, None)
+                if event is not None:
+                    event.set()
+                continue
             self._on_message(message)
 
     def close(self, timeout: float = 5.0) -> None:

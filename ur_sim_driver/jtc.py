@@ -61,6 +61,10 @@ class TrajectoryController:
         hold_positions: (n,) [rad] position held before any trajectory.
         v_max, a_max: (n,) joint velocity [rad/s] and acceleration [rad/s^2] limits of the robot.
         speed_scaling: initial speed_scaling_input factor in [0, 1].
+        scaling: the robot's own speed scaling, shared by every controller that commands the robot (a new one
+            when None).
+        scaled: advance trajectory time by the speed scaling (the scaled JTC); False ignores it
+            (joint_trajectory_controller): trajectory time is real time, whatever the robot makes of it.
 
     Attributes:
         speed_scaling: the speed_scaling_input factor in [0, 1] (set by the node).
@@ -71,11 +75,13 @@ class TrajectoryController:
 
     def __init__(self, joint_names: tuple[str, ...], defaults: SegmentTolerances,
                  hold_positions: np.ndarray, v_max: np.ndarray, a_max: np.ndarray,
-                 speed_scaling: float = 1.0) -> None:
+                 speed_scaling: float = 1.0, scaling: RobotSpeedScaling | None = None,
+                 scaled: bool = True) -> None:
         self.joint_names = tuple(joint_names)
         self.defaults = defaults
         self.speed_scaling = float(speed_scaling)
-        self.scaling = RobotSpeedScaling(v_max, a_max, speed_scaling)
+        self.scaling = scaling if scaling is not None else RobotSpeedScaling(v_max, a_max, speed_scaling)
+        self.scaled = scaled
         self.stop: np.ndarray | None = np.array(hold_positions, dtype=float)
         self._first_sample = False
         self._hold = np.array(hold_positions, dtype=float)
@@ -167,7 +173,7 @@ class TrajectoryController:
             self.stop = traj.points.positions[last] if raw.ended or raw.segment_index == last else None
             # The factor read this cycle is the robot's from the previous one (the driver reads it with the
             # state); what the robot makes of this cycle's reference shows from the next cycle on.
-            total = self.scaling.total
+            total = self.scaling.total if self.scaled else 1.0
             self.scaling.update(raw.velocities, raw.positions - q, self.speed_scaling, period)
             sample = raw._replace(velocities=raw.velocities * total, accelerations=raw.accelerations * total**2)
             self._traj_time += period * total

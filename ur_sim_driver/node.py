@@ -1,11 +1,14 @@
 """The `ur_sim` node: a MuJoCo-simulated UR arm behind the UR ROS 2 driver's interfaces.
 
 Threads: the simulation loop runs in its own thread (paced to the wall clock, or as fast as possible) and
-publishes every control cycle. The trajectory controller's action server and joint_trajectory subscription
-run in a process of their own (``trajectory_gateway.py``, started here), so that receiving a large
-trajectory never holds up the loop; a receiving thread hands its trajectories and cancels to the loop under
-one lock, and the loop sends back outcomes and feedback. speed_scaling_input is served here. All times on the
-interfaces are simulated time, which the node publishes on /clock.
+publishes every control cycle. The driver's controllers are components (``controllers/``), each its own node,
+held by the controller manager (``controllers/controller_manager_node.py``), which switches them between two
+cycles; the active joint controller (a trajectory or forward command controller) gives the robot its reference
+every cycle. The trajectory controllers' action servers and joint_trajectory subscriptions run in a process of
+their own (``trajectory_gateway.py``, started here), so that receiving a large trajectory never holds up the
+loop; a receiving thread hands its trajectories and cancels to their controller under one lock, and the
+controllers send back outcomes and feedback. All times on the interfaces are simulated time, which the node
+publishes on /clock.
 """
 from __future__ import annotations
 
@@ -15,29 +18,30 @@ import sys
 import threading
 import time
 
-import numpy as np
 import rclpy
-from control_msgs.msg import JointTrajectoryControllerState, SpeedScalingFactor
-from rclpy.callback_groups import MutuallyExclusiveCallbackGroup
 from rclpy.executors import ExternalShutdownException, MultiThreadedExecutor
 from rclpy.node import Node
 from rclpy.signals import SignalHandlerOptions
 from rosgraph_msgs.msg import Clock
 
 from ur_sim_driver import conversions as conv
-from ur_sim_driver import result_codes
 from ur_sim_driver.controllers.base import Component, Cycle, Host
+from ur_sim_driver.controllers.controller_manager_node import ControllerManagerNode
 from ur_sim_driver.controllers.dispenser import SimulatedDispenser
 from ur_sim_driver.controllers.force_torque_sensor_broadcaster import ForceTorqueSensorBroadcaster
+from ur_sim_driver.controllers.forward_command import ForwardCommandController
 from ur_sim_driver.controllers.io_and_status import IoAndStatusController
+from ur_sim_driver.controllers.joint_command import HoldPosition, JointCommandController, JointCommander
 from ur_sim_driver.controllers.joint_state_broadcaster import JointStateBroadcaster
+from ur_sim_driver.controllers.joint_trajectory import JointTrajectoryControllerComponent
+from ur_sim_driver.controllers.not_emulated import not_emulated_controllers
 from ur_sim_driver.controllers.speed_scaling_state_broadcaster import SpeedScalingStateBroadcaster
 from ur_sim_driver.controllers.tcp_pose_broadcaster import TcpPoseBroadcaster
 from ur_sim_driver.controllers.ur_configuration import UrConfigurationController
 from ur_sim_driver.dashboard import DashboardClient
-from ur_sim_driver.errors import TrajectoryError, UrSimError
-from ur_sim_driver.gateway_link import Cancel, Canceled, Ended, Feedback, Gate, GatewayConfig, GatewayLink, Start
-from ur_sim_driver.jtc import Outcome, TrajectoryController
+from ur_sim_driver.errors import UrSimError
+from ur_sim_driver.gateway_link import Gate, GatewayConfig, GatewayLink
+from ur_sim_driver.jtc import TrajectoryController
 from ur_sim_driver.memory import use_mmap_for_large_blocks
 from ur_sim_driver.robot_state import PROTECTIVE_STOP, RobotState
 from ur_sim_driver.robot_state_publisher import RobotStatePublisher
@@ -45,12 +49,13 @@ from ur_sim_driver.safety import contact_cause, limit_cause
 from ur_sim_driver.sim_config import SimConfig, sim_config_from_params
 from ur_sim_driver.sim_io import SimulatedInputs
 from ur_sim_driver.simulator import Simulator
+from ur_sim_driver.speed_scaling import RobotSpeedScaling
 from ur_sim_driver.tolerances import default_tolerances
-from ur_sim_driver.validation import map_to_config_order
 
 GIL_SWITCH_INTERVAL = 2e-4  # [s]
 VIEWER_FRAME_PERIOD = 1.0 / 30.0  # [s] of wall time
 _CATCH_UP_LIMIT = 0.1  # [s] of wall time the real-time loop may fall behind before it stops catching up
+UNSCALED_CONTROLLER = 'joint_trajectory_controller'
 
 
 class UrSimNode(Node):
@@ -77,42 +82,54 @@ class UrSimNode(Node):
             self.joints, trajectory=[c.trajectory for c in self.cfg.constraints],
             goal=[c.goal for c in self.cfg.constraints], stopped_velocity=self.cfg.stopped_velocity_tolerance,
             goal_time=self.cfg.goal_time)
-        self.jtc = TrajectoryController(self.joints, self._defaults, self.sim.state().q,
-                                        self.sim.params.v_max, self.sim.a_max,
-                                        self.cfg.speed_scaling_initial_factor)
+        # The robot's own speed scaling, whichever controller commands it.
+        self.scaling = RobotSpeedScaling(self.sim.params.v_max, self.sim.a_max, self.cfg.speed_scaling_initial_factor)
         self._lock = threading.Lock()
         self._stop = threading.Event()
-        self._feedback_every = max(1, round(self.sim.control_rate / self.cfg.action_monitor_rate))
         self._cycle = 0
         self.robot = RobotState(powered_off=self.cfg.start_powered_off, programs=self.cfg.programs)
         self._refusal = self.robot.motion_refusal()
 
         p = self.cfg.prefixed
         ctrl = self.cfg.controller_name
-        self._pub_state = self.create_publisher(JointTrajectoryControllerState, p(f'{ctrl}/controller_state'), 10)
         self._pub_clock = self.create_publisher(Clock, '/clock', 10)
 
-        self.create_subscription(SpeedScalingFactor, p(f'{ctrl}/speed_scaling_input'), self._on_speed_scaling,
-                                 10, callback_group=MutuallyExclusiveCallbackGroup())
         params = self.sim.params
+        trajectory_names = (ctrl,) if ctrl == UNSCALED_CONTROLLER else (ctrl, UNSCALED_CONTROLLER)
+        self._trajectory: dict[str, JointTrajectoryControllerComponent] = {}
         self.gateway = GatewayLink(GatewayConfig(
-            node_name=ctrl, namespace=self.cfg.namespace, joints=self.joints, q_min=params.q_min,
-            q_max=params.q_max, v_max=params.v_max, strict_limits=self.cfg.strict_limit_checks,
+            controllers=trajectory_names, active=(ctrl,), namespace=self.cfg.namespace, joints=self.joints,
+            q_min=params.q_min, q_max=params.q_max, v_max=params.v_max, strict_limits=self.cfg.strict_limit_checks,
             allow_partial=self.cfg.allow_partial_joints_goal,
             allow_nonzero_end_velocity=self.cfg.allow_nonzero_velocity_at_trajectory_end,
             defaults=self._defaults), self._on_gateway)
         if self._refusal is not None:
             self.gateway.send(Gate(self._refusal))
 
-        # The driver's controllers and nodes besides the trajectory controller, one module each.
-        self.host = Host(self.cfg, self.sim, self._lock, self.robot, self.jtc.scaling, self.context)
+        # The driver's controllers and nodes, one module each; the controller manager holds them.
+        self.host = Host(self.cfg, self.sim, self._lock, self.robot, self.scaling, self.context)
+        feedback_every = round(self.sim.control_rate / self.cfg.action_monitor_rate)
+        for name in trajectory_names:
+            core = TrajectoryController(self.joints, self._defaults, self.sim.state().q, params.v_max,
+                                        self.sim.a_max, self.cfg.speed_scaling_initial_factor if name == ctrl else 1.0,
+                                        scaling=self.scaling, scaled=name == ctrl)
+            self._trajectory[name] = JointTrajectoryControllerComponent(name, core, self.gateway, feedback_every,
+                                                                        initially_active=name == ctrl)
         self.components: list[Component] = [
             JointStateBroadcaster(), SpeedScalingStateBroadcaster(), TcpPoseBroadcaster(),
             IoAndStatusController(), UrConfigurationController(), DashboardClient(), SimulatedInputs(),
-            ForceTorqueSensorBroadcaster(), RobotStatePublisher(), SimulatedDispenser()]
+            ForceTorqueSensorBroadcaster(), RobotStatePublisher(), SimulatedDispenser(),
+            *self._trajectory.values(), ForwardCommandController('position'), ForwardCommandController('velocity'),
+            *not_emulated_controllers()]
         for component in self.components:
             component.configure(self.host)
-            component.activate()
+            if component.initially_active:
+                component.activate()
+        self.controller_manager = ControllerManagerNode(self.host, [c for c in self.components if c.is_controller])
+        self._commanders = [c for c in self.components if isinstance(c, JointCommandController)]
+        self._holder = HoldPosition()
+        self._commander: JointCommander | None = None
+        self.controller_manager.program_state_changed(self._refusal)
 
         self._init_messages()
         self._thread = threading.Thread(target=self._run, name='ur_sim_loop', daemon=True)
@@ -133,61 +150,30 @@ class UrSimNode(Node):
                                           f"{', '.join(sorted(known - {'constraints'}))}, constraints.*")
 
     def nodes(self) -> list[Node]:
-        """This node and every component's: an executor spinning ur_sim must spin all of them."""
-        return [self, *(c.node for c in self.components if c.node is not None)]
+        """This node, the controller manager's and every component's: an executor spinning ur_sim must spin all."""
+        return [self, self.controller_manager.node, *(c.node for c in self.components if c.node is not None)]
+
+    @property
+    def jtc(self) -> TrajectoryController:
+        """The scaled trajectory controller's core (the driver's default controller)."""
+        return self._trajectory[self.cfg.controller_name].core
 
     def _init_messages(self) -> None:
-        joints = list(self.sim.joint_names)
-        self._state_msg = JointTrajectoryControllerState(joint_names=joints)
         self._clock_msg = Clock()
 
-    # ---- ROS callbacks (executor threads) ----------------------------------------------------------
+    # ---- from the gateway process (its receiving thread) -------------------------------------------------------
     def _on_gateway(self, message: object) -> None:
-        """A trajectory or cancel from the controller's interface process (receiving thread)."""
-        if isinstance(message, Start):
-            try:
-                # Mapping a long trajectory is done outside the lock the loop needs every cycle.
-                points = map_to_config_order(message.command, self.joints, self._hold_reference())
-            except TrajectoryError as exc:  # validated in the gateway: only a bug gets here
-                self.get_logger().error(f'trajectory not started: {exc}')
-                return
-            with self._lock:
-                refusal = self.robot.motion_refusal()
-                if refusal is None:
-                    state = self.sim.state()
-                    preempted = self.jtc.start(points, state.t, state.q, state.qd, token=message.token,
-                                               tolerances=message.tolerances)
-            if refusal is not None:  # a topic message, or a goal accepted while the state changed
-                reason = f'the controller is not running: {refusal}'
-                if message.token is not None:
-                    self._finish(Outcome(message.token, result_codes.INVALID_GOAL, reason))
-                else:
-                    self.get_logger().error(f'Dropped JointTrajectory message: {reason}')
-                return
-            if preempted is not None:
-                self._finish(preempted)
-        elif isinstance(message, Cancel):
-            with self._lock:
-                ok = self.jtc.cancel(message.token, self.sim.state().q)
-            self.gateway.send(Canceled(message.token, ok))
-
-    def _on_speed_scaling(self, msg: SpeedScalingFactor) -> None:
-        f = msg.factor
-        if not (0.0 <= f <= 1.0):
-            self.get_logger().error(f'Ignored speed_scaling_input: factor = {f} is outside [0.0, 1.0]; '
-                                    f'keeping {self.jtc.speed_scaling}')
+        """A trajectory or cancel for one of the trajectory controllers."""
+        controller = self._trajectory.get(message.controller)
+        if controller is None:  # only a bug gets here: the gateway serves exactly these controllers
+            self.get_logger().error(f'gateway message for unknown controller {message.controller!r}')
             return
         with self._lock:
-            self.jtc.speed_scaling = float(f)
-
-    def _hold_reference(self) -> np.ndarray:
-        # Joints a partial goal leaves out keep their current command (upstream), else the measured position.
-        sample = self.jtc.last_sample
-        return sample.positions.copy() if sample is not None else self.sim.state().q
-
-    def _finish(self, outcome: Outcome) -> None:
-        if outcome.token is not None:
-            self.gateway.send(Ended(outcome.token, outcome.code, outcome.message))
+            # A robot state changed since the last cycle (a dashboard call) is seen now, as the driver's
+            # controller_stopper would have seen it before this message arrived.
+            self.robot.update(self.sim.time)
+            self._controller_stopper()
+        controller.on_gateway(message)
 
     # ---- simulation loop (own thread) ------------------------------------------------------------
     def _open_viewer(self):
@@ -237,24 +223,27 @@ class UrSimNode(Node):
                 viewer.close()
 
     def step_once(self) -> None:
-        """One control cycle: robot state, JTC update, torques, physics step, safety, then the components publish."""
+        """One control cycle: pending controller switches, robot state, the active joint controller's reference,
+        torques, physics step, safety, then the active components publish."""
         with self._lock:
+            self.controller_manager.apply_pending()
             state = self.sim.state()
             self.robot.update(state.t)
-            ended = [self._controller_stopper(state.q)]
-            sample, outcome = self.jtc.update(state.t, self.sim.control_dt, state.q, state.qd)
+            self._controller_stopper()
+            commander = next((c for c in self._commanders if c.active), self._holder)
+            if commander is not self._commander:
+                commander.take_over(state)
+                self._commander = commander
+            sample, stop = commander.command(state, self.sim.control_dt)
             tcp_position, tcp_orientation = self.sim.tcp_pose()
             wrench = self.sim.wrench()
-            tau = self.sim.advance(state, sample, self.jtc.stop)
-            ended.append(outcome)
+            tau = self.sim.advance(state, sample, stop)
             cause = self._safety_check(sample)
             if cause is not None:
                 # Seen in this cycle's physics step: the arm is halted from the next cycle on.
                 self.robot.protective_stop(self.sim.time, cause)
-                ended.append(self._controller_stopper(self.sim.state().q))
-            token = self.jtc.active_token
-            feedback_due = token is not None and self._cycle % self._feedback_every == 0
-            robot_factor, total_factor = self.jtc.scaling.factor, self.jtc.scaling.total
+                self._controller_stopper()
+            robot_factor, total_factor = self.scaling.factor, self.scaling.total
         self.gateway.set_sim_time(self.sim.time)
         cycle = Cycle(self._cycle, state.t, conv.sec_to_time(state.t), state, sample, tau, robot_factor,
                       total_factor, tcp_position, tcp_orientation, wrench)
@@ -262,11 +251,6 @@ class UrSimNode(Node):
             if component.active:
                 component.update(cycle)
         self._publish(cycle)
-        if feedback_due:
-            self._publish_feedback(token, state, sample)
-        for e in ended:
-            if e is not None:
-                self._finish(e)
         if cause is not None:
             self.get_logger().error(f'PROTECTIVE_STOP: {cause}')
         self._cycle += 1
@@ -281,39 +265,20 @@ class UrSimNode(Node):
             cause = limit_cause(self.sim.physics.positions(), sample.positions, p.q_min, p.q_max, self.joints)
         return cause
 
-    def _controller_stopper(self, q: np.ndarray) -> Outcome | None:
-        """Under the lock: when the robot can no longer move, hold `q` and end the active goal, as the driver's
-        controller_stopper deactivates the controllers; tell the gateway of every change."""
+    def _controller_stopper(self) -> None:
+        """Under the lock: when the robot can no longer move, the controllers that command it are deactivated (their
+        goals end and the robot holds), and activated again when it can, as the driver's controller_stopper does;
+        the gateway hears of every change."""
         refusal = self.robot.motion_refusal()
         if refusal == self._refusal:
-            return None
+            return
         self._refusal = refusal
         self.gateway.send(Gate(refusal))
-        if refusal is None:
-            return None
-        token = self.jtc.active_token
-        self.jtc.hold(q)
-        if token is None:
-            return None
-        return Outcome(token, result_codes.INVALID_GOAL, f'the controller was deactivated: {refusal}')
+        self.controller_manager.program_state_changed(refusal)
 
     def _publish(self, cycle: Cycle) -> None:
-        state, sample = cycle.state, cycle.reference
-        st = self._state_msg
-        st.header.stamp = cycle.stamp
-        conv.fill_point(st.reference, sample.positions, sample.velocities, sample.accelerations)
-        conv.fill_point(st.feedback, state.q, state.qd)
-        conv.fill_point(st.error, sample.positions - state.q, sample.velocities - state.qd)
-        conv.fill_point(st.output, sample.positions, sample.velocities, effort=cycle.effort)
-        # The controller reports the factor it advances trajectory time by; the broadcaster the robot's own.
-        st.speed_scaling_factor = cycle.total_factor
-        self._pub_state.publish(st)
         self._clock_msg.clock = cycle.stamp
         self._pub_clock.publish(self._clock_msg)
-
-    def _publish_feedback(self, token, state, sample) -> None:
-        self.gateway.send(Feedback(token, state.t, (sample.positions, sample.velocities, sample.accelerations),
-                                   (state.q, state.qd), (sample.positions - state.q, sample.velocities - state.qd)))
 
     def shutdown(self) -> None:
         """Stop the simulation loop and the controller's interface process, and wait for both."""
@@ -325,6 +290,7 @@ class UrSimNode(Node):
     def destroy_node(self) -> None:
         for component in self.components:
             component.destroy()
+        self.controller_manager.destroy()
         super().destroy_node()
 
 

@@ -40,6 +40,7 @@ class RobotStatePublisher(Component):
 
     name = 'robot_state_publisher'
     type_name = 'robot_state_publisher'  # a node of the driver's launch file, not a controller
+    is_controller = False
 
     def on_configure(self, host: Host, node: Node) -> None:
         sim, cfg = host.sim, host.cfg

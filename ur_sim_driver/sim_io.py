@@ -33,6 +33,7 @@ class SimulatedInputs(Component):
 
     name = 'ur_sim_inputs'
     type_name = 'ur_sim/SimulatedInputs'
+    is_controller = False
 
     def on_configure(self, host: Host, node: Node) -> None:
         node.create_service(SetIO, host.cfg.prefixed('ur_sim/set_input'), self._on_set_input)

@@ -1,8 +1,10 @@
-"""The scaled JTC's ROS interfaces, in a process of their own (see ``gateway_link.py`` for why).
+"""The trajectory controllers' ROS interfaces, in a process of their own (see ``gateway_link.py`` for why).
 
-This process is the controller's node, as in ros2_control, where every controller is a node named after it:
-it serves ``~/follow_joint_trajectory`` and subscribes to ``~/joint_trajectory``, validates what arrives,
-and hands each accepted trajectory to the simulation process, which executes it and reports back.
+This process holds one node per trajectory controller (scaled_joint_trajectory_controller,
+joint_trajectory_controller), as in ros2_control, where every controller is a node named after it: each serves
+``~/follow_joint_trajectory`` and subscribes to ``~/joint_trajectory``, validates what arrives, and hands each
+accepted trajectory to the simulation process, which executes it and reports back. A controller that the
+controller manager has deactivated refuses goals and messages with upstream's words.
 
 Order: goal requests, their acceptance and topic messages are handled one at a time in one mutually
 exclusive callback group, and each accepted trajectory is handed over at acceptance, in that order. So the
@@ -17,6 +19,7 @@ import signal
 import struct
 import sys
 import threading
+import time
 from multiprocessing.connection import Connection
 
 import rclpy
@@ -33,7 +36,18 @@ from ur_sim_driver import result_codes
 from ur_sim_driver.cdr import parse_joint_trajectory
 from ur_sim_driver.command_arrays import CommandArrays, from_points
 from ur_sim_driver.errors import TrajectoryError
-from ur_sim_driver.gateway_link import STOP, Cancel, Canceled, Ended, Feedback, Gate, GatewayConfig, Start
+from ur_sim_driver.gateway_link import (
+    STOP,
+    Ack,
+    Activation,
+    Cancel,
+    Canceled,
+    Ended,
+    Feedback,
+    Gate,
+    GatewayConfig,
+    Start,
+)
 from ur_sim_driver.memory import release_memory, use_mmap_for_large_blocks
 from ur_sim_driver.tolerances import resolve_tolerances
 from ur_sim_driver.validation import validate_trajectory
@@ -42,7 +56,12 @@ from ur_sim_driver.validation import validate_trajectory
 LARGE_TRAJECTORY = 10_000
 # A start stamp this far ahead of the simulated clock is accepted (upstream does) but logged [s].
 FAR_FUTURE = 5.0
+# How long a goal to an inactive controller waits for an activation in flight before it is rejected [s].
+ACTIVATION_GRACE = 0.05
 _SHUTDOWN = Ended(None, result_codes.INVALID_GOAL, 'ur_sim is shutting down.')
+# Upstream JTC's words while it is inactive (goals; topic messages).
+INACTIVE_GOAL = "Can't accept new action goals. Controller is not running."
+INACTIVE_TOPIC = "Can't accept new commands. subscriber is inactive"  # (logged by the simulation side)
 
 
 class _Waiter:
@@ -54,23 +73,32 @@ class _Waiter:
         self.canceled: bool | None = None
 
 
-class TrajectoryGateway:
-    """The controller's action server and topic subscription on `node`, talking to the simulation over `conn`."""
+class _Shared:
+    """What the controllers of this process share: the pipe (one sender at a time) and the robot's state."""
 
-    def __init__(self, node: Node, cfg: GatewayConfig, conn: Connection, sim_time: mmap.mmap) -> None:
+    def __init__(self, conn: Connection, sim_time: mmap.mmap) -> None:
+        self.conn = conn
+        self.send_lock = threading.Lock()
+        self.sim_time = sim_time
+        self.refusal: str | None = None  # why the robot cannot move now (from the simulation), or None
+
+
+class TrajectoryGateway:
+    """One controller's action server and topic subscription on `node`, talking to the simulation."""
+
+    def __init__(self, node: Node, cfg: GatewayConfig, name: str, shared: _Shared) -> None:
         self.node = node
         self.cfg = cfg
-        self._conn = conn
-        self._send_lock = threading.Lock()
-        self._sim_time = sim_time
+        self.name = name
+        self._shared = shared
+        self._sim_time = shared.sim_time
         self._lock = threading.Lock()
         self._waiters: dict[bytes, _Waiter] = {}
         self._handles: dict[bytes, object] = {}
         self._pending: dict[int, CommandArrays] = {}  # converted goals between goal callback and acceptance
-        self.stopped = threading.Event()
-        self.refusal: str | None = None  # why the robot cannot move now (from the simulation), or None
+        self.active = name in cfg.active
         ns = cfg.namespace.strip('/')
-        base = f'/{ns}/{cfg.node_name}' if ns else f'/{cfg.node_name}'
+        base = f'/{ns}/{name}' if ns else f'/{name}'
         ordered = MutuallyExclusiveCallbackGroup()
         self._action = ActionServer(
             node, FollowJointTrajectory, f'{base}/follow_joint_trajectory', execute_callback=self._execute,
@@ -78,8 +106,18 @@ class TrajectoryGateway:
             cancel_callback=lambda _: CancelResponse.ACCEPT, callback_group=ordered)
         node.create_subscription(JointTrajectory, f'{base}/joint_trajectory', self._on_topic, 10,
                                  callback_group=ordered, raw=True)
-        self._receiver = threading.Thread(target=self._receive, name='gateway_receive', daemon=True)
-        self._receiver.start()
+
+    def _wait_active(self, timeout: float) -> bool:
+        """Whether the controller is active, allowing an activation already on its way through the pipe (the
+        controller_stopper restores a controller in the cycle after the robot can move again) to arrive."""
+        deadline = time.monotonic() + timeout
+        while not self.active and time.monotonic() < deadline:
+            time.sleep(0.002)
+        return self.active
+
+    @property
+    def refusal(self) -> str | None:
+        return self._shared.refusal
 
     # ---- validation --------------------------------------------------------------------------------
     def _validate(self, cmd: CommandArrays, what: str) -> str | None:
@@ -103,8 +141,13 @@ class TrajectoryGateway:
         cmd = from_points(traj.joint_names, conv.time_to_sec(traj.header.stamp), traj.points)
         # Upstream's JTC rejects goals while inactive, and the controller_stopper deactivates it while the robot
         # cannot move. (Topic messages are refused by the simulation, which knows the state without delay.)
-        reason = None if self.refusal is None else f'the controller is not running: {self.refusal}'
-        reason = reason or self._validate(cmd, 'FollowJointTrajectory goal')
+        refusal = self.refusal
+        if refusal is not None:  # deactivated by the controller_stopper: name the robot's state
+            reason = f'the controller is not running: {refusal}'
+        elif not self._wait_active(ACTIVATION_GRACE):
+            reason = INACTIVE_GOAL
+        else:
+            reason = self._validate(cmd, 'FollowJointTrajectory goal')
         if reason is None and goal.multi_dof_trajectory.points:
             reason = 'multi_dof_trajectory is not supported by this controller (it has no multi-DOF joints)'
         if reason is not None:
@@ -125,10 +168,12 @@ class TrajectoryGateway:
         with self._lock:
             self._waiters[token] = _Waiter()
             self._handles[token] = goal_handle
-        self._send(Start(token, cmd, tolerances))
+        self._send(Start(token, cmd, tolerances, self.name))
         goal_handle.execute()
 
     def _on_topic(self, data: bytes) -> None:
+        # Whether the controller is active is decided by the simulation, which knows it without delay (a message
+        # right after the robot can move again meets the controller that the controller_stopper restores).
         try:
             cmd = parse_joint_trajectory(data)
         except TrajectoryError as exc:
@@ -138,7 +183,7 @@ class TrajectoryGateway:
         if reason is not None:
             self.node.get_logger().error(f'Dropped JointTrajectory message: {reason}')
             return
-        self._send(Start(None, cmd, None))
+        self._send(Start(None, cmd, None, self.name))
 
     # ---- execution -----------------------------------------------------------------------------------
     def _execute(self, goal_handle) -> FollowJointTrajectory.Result:
@@ -148,7 +193,7 @@ class TrajectoryGateway:
         cancel_sent = False
         while not waiter.event.wait(0.005):
             if goal_handle.is_cancel_requested and not cancel_sent:
-                self._send(Cancel(token))
+                self._send(Cancel(token, self.name))
                 cancel_sent = True
         with self._lock:
             self._waiters.pop(token, None)
@@ -175,33 +220,23 @@ class TrajectoryGateway:
         return result
 
     def _send(self, message: object) -> None:
-        with self._send_lock:
-            try:
-                self._conn.send(message)
-            except (OSError, BrokenPipeError):
-                pass  # the simulation is gone; the receiving thread ends every goal
+        _send(self._shared, message)
 
-    def _receive(self) -> None:
-        try:
-            while True:
-                message = self._conn.recv()
-                if message == STOP:
-                    break
-                self._dispatch(message)
-        except (OSError, EOFError):
-            pass
+    def owns(self, token: bytes) -> bool:
+        with self._lock:
+            return token in self._waiters
+
+    def end_all(self) -> None:
+        """The simulation is gone: every goal ends."""
         with self._lock:
             waiters = list(self._waiters.values())
         for waiter in waiters:
             if not waiter.event.is_set():
                 waiter.ended = _SHUTDOWN
                 waiter.event.set()
-        self.stopped.set()
 
-    def _dispatch(self, message: object) -> None:
-        if isinstance(message, Gate):
-            self.refusal = message.reason
-            return
+    def dispatch(self, message: object) -> None:
+        """An Ended, Canceled or Feedback for one of this controller's goals."""
         with self._lock:
             waiter = self._waiters.get(message.token)
             handle = self._handles.get(message.token)
@@ -227,8 +262,42 @@ class TrajectoryGateway:
                 pass
 
 
+def _send(shared: _Shared, message: object) -> None:
+    with shared.send_lock:
+        try:
+            shared.conn.send(message)
+        except (OSError, BrokenPipeError):
+            pass  # the simulation is gone; the receiving thread ends every goal
+
+
+def _receive(shared: _Shared, gateways: dict[str, TrajectoryGateway], stopped: threading.Event) -> None:
+    """Hand the simulation's messages to the controllers until it says stop or the pipe closes."""
+    try:
+        while True:
+            message = shared.conn.recv()
+            if message == STOP:
+                break
+            if isinstance(message, Gate):
+                shared.refusal = message.reason
+            elif isinstance(message, Activation):
+                gateway = gateways.get(message.controller)
+                if gateway is not None:
+                    gateway.active = message.active
+                _send(shared, Ack(message.seq))
+            else:
+                for gateway in gateways.values():
+                    if gateway.owns(message.token):
+                        gateway.dispatch(message)
+                        break
+    except (OSError, EOFError):
+        pass
+    for gateway in gateways.values():
+        gateway.end_all()
+    stopped.set()
+
+
 def run_gateway(conn: Connection, sim_time: mmap.mmap) -> None:
-    """Serve the controller's interfaces until the simulation says stop (or its end of the pipe closes)."""
+    """Serve the controllers' interfaces until the simulation says stop (or its end of the pipe closes)."""
     # The parent stops this process through the pipe; Ctrl-C in a terminal reaches both, and the parent must
     # be the one to decide (it ends the goals first).
     signal.signal(signal.SIGINT, signal.SIG_IGN)
@@ -236,12 +305,17 @@ def run_gateway(conn: Connection, sim_time: mmap.mmap) -> None:
     use_mmap_for_large_blocks()
     cfg: GatewayConfig = conn.recv()
     rclpy.init(signal_handler_options=SignalHandlerOptions.NO)
-    node = Node(cfg.node_name, namespace=cfg.namespace or '/')
-    gateway = TrajectoryGateway(node, cfg, conn, sim_time)
+    shared = _Shared(conn, sim_time)
     executor = MultiThreadedExecutor(num_threads=4)
-    executor.add_node(node)
+    gateways: dict[str, TrajectoryGateway] = {}
+    for name in cfg.controllers:
+        node = Node(name, namespace=cfg.namespace or '/')
+        gateways[name] = TrajectoryGateway(node, cfg, name, shared)
+        executor.add_node(node)
+    stopped = threading.Event()
+    threading.Thread(target=_receive, args=(shared, gateways, stopped), name='gateway_receive', daemon=True).start()
     try:
-        while not gateway.stopped.is_set() and rclpy.ok():
+        while not stopped.is_set() and rclpy.ok():
             executor.spin_once(timeout_sec=0.05)
         # Let the execute callbacks return their (shutdown) results before the context goes.
         for _ in range(20):
@@ -250,7 +324,8 @@ def run_gateway(conn: Connection, sim_time: mmap.mmap) -> None:
         pass
     finally:
         executor.shutdown(timeout_sec=2.0)
-        node.destroy_node()
+        for gateway in gateways.values():
+            gateway.node.destroy_node()
         rclpy.try_shutdown()
         conn.close()
 

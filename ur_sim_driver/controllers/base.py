@@ -98,6 +98,10 @@ class Component:
 
     name: str = ''
     type_name: str = ''
+    initially_active: bool = True  # the driver's launch file starts it active
+    # A ros2_control controller (listed and switched by the controller manager); False for the driver's other
+    # nodes (dashboard client, robot_state_publisher) and ur_sim's own simulation-only ones.
+    is_controller: bool = True
 
     def __init__(self) -> None:
         self.node: Node | None = None
@@ -125,6 +129,11 @@ class Component:
         if self.node is not None:
             self.node.destroy_node()
             self.node = None
+
+    def interfaces(self, cfg: SimConfig) -> tuple[tuple[str, ...], tuple[str, ...]]:
+        """(command interfaces it claims while active, state interfaces it reads), with the tf_prefix, as
+        list_controllers reports them; the controller manager refuses two claims of one command interface."""
+        return (), ()
 
     # ---- hooks ---------------------------------------------------------------------------------
     def on_configure(self, host: Host, node: Node) -> None:

@@ -56,6 +56,7 @@ class SimulatedDispenser(Component):
 
     name = 'ur_sim_dispenser'
     type_name = 'ur_sim/SimulatedDispenser'
+    is_controller = False  # simulation only: the controller manager does not list or switch it
 
     def configure(self, host: Host) -> None:
         self.host = host

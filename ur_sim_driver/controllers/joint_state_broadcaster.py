@@ -6,6 +6,8 @@ from sensor_msgs.msg import JointState
 
 from ur_sim_driver import conversions as conv
 from ur_sim_driver.controllers.base import Component, Cycle, Host
+from ur_sim_driver.sim_config import SimConfig
+from ur_sim_driver.ur_hardware import joint_interfaces, prefixed_joints
 
 
 class JointStateBroadcaster(Component):
@@ -13,6 +15,9 @@ class JointStateBroadcaster(Component):
 
     name = 'joint_state_broadcaster'
     type_name = 'joint_state_broadcaster/JointStateBroadcaster'
+
+    def interfaces(self, cfg: SimConfig) -> tuple[tuple[str, ...], tuple[str, ...]]:
+        return (), joint_interfaces(prefixed_joints(cfg.joints, cfg.tf_prefix), 'position', 'velocity', 'effort')
 
     def on_configure(self, host: Host, node: Node) -> None:
         # Upstream publishes on the node-relative 'joint_states', remapped to /joint_states by the launch file.

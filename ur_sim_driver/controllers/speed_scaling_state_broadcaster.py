@@ -5,6 +5,7 @@ from rclpy.node import Node
 from std_msgs.msg import Float64
 
 from ur_sim_driver.controllers.base import Component, Cycle, Host
+from ur_sim_driver.sim_config import SimConfig
 
 
 class SpeedScalingStateBroadcaster(Component):
@@ -12,6 +13,9 @@ class SpeedScalingStateBroadcaster(Component):
 
     name = 'speed_scaling_state_broadcaster'
     type_name = 'ur_controllers/SpeedScalingStateBroadcaster'
+
+    def interfaces(self, cfg: SimConfig) -> tuple[tuple[str, ...], tuple[str, ...]]:
+        return (), (f'{cfg.tf_prefix}speed_scaling/speed_scaling_factor',)
 
     def on_configure(self, host: Host, node: Node) -> None:
         self._pub = node.create_publisher(Float64, host.cfg.prefixed(f'{self.name}/speed_scaling'), 10)

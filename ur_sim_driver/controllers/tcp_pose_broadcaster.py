@@ -6,6 +6,7 @@ from rclpy.node import Node
 from tf2_msgs.msg import TFMessage
 
 from ur_sim_driver.controllers.base import Component, Cycle, Host
+from ur_sim_driver.sim_config import SimConfig
 
 
 class TcpPoseBroadcaster(Component):
@@ -14,6 +15,11 @@ class TcpPoseBroadcaster(Component):
 
     name = 'tcp_pose_broadcaster'
     type_name = 'pose_broadcaster/PoseBroadcaster'
+
+    def interfaces(self, cfg: SimConfig) -> tuple[tuple[str, ...], tuple[str, ...]]:
+        axes = ('position.x', 'position.y', 'position.z', 'orientation.x', 'orientation.y', 'orientation.z',
+                'orientation.w')
+        return (), tuple(f'{cfg.tf_prefix}tcp_pose/{a}' for a in axes)
 
     def on_configure(self, host: Host, node: Node) -> None:
         self._pub = node.create_publisher(PoseStamped, host.cfg.prefixed(f'{self.name}/pose'), 10)

@@ -1,0 +1,55 @@
+"""Clients of ur_sim's controller manager for the tests (over DDS, on the harness's client node)."""
+from __future__ import annotations
+
+from builtin_interfaces.msg import Duration
+from controller_manager_msgs.srv import ListControllers, ListControllerTypes, ListHardwareInterfaces, SwitchController
+from rclpy.callback_groups import ReentrantCallbackGroup
+from sim_harness import SimHarness, wait_for
+
+STRICT = SwitchController.Request.STRICT
+BEST_EFFORT = SwitchController.Request.BEST_EFFORT
+
+
+class ControllerManagerClient:
+    """list_controllers, switch_controller, list_controller_types and list_hardware_interfaces of one ur_sim."""
+
+    def __init__(self, h: SimHarness) -> None:
+        p = h.sim.cfg.prefixed
+        group = ReentrantCallbackGroup()
+        node = h.client
+        self._list = node.create_client(ListControllers, p('controller_manager/list_controllers'),
+                                        callback_group=group)
+        self._switch = node.create_client(SwitchController, p('controller_manager/switch_controller'),
+                                          callback_group=group)
+        self._types = node.create_client(ListControllerTypes, p('controller_manager/list_controller_types'),
+                                         callback_group=group)
+        self._hardware = node.create_client(ListHardwareInterfaces, p('controller_manager/list_hardware_interfaces'),
+                                            callback_group=group)
+        for client in (self._list, self._switch, self._types, self._hardware):
+            wait_for(client.service_is_ready, what=f'the service {client.srv_name}')
+
+    @staticmethod
+    def _call(client, request):
+        future = client.call_async(request)
+        wait_for(future.done, what=f'the answer of {client.srv_name}')
+        return future.result()
+
+    def switch(self, activate=(), deactivate=(), strictness=STRICT, timeout: float = 0.0):
+        """The SwitchController response (ok, message)."""
+        ns = round(timeout * 1e9)
+        return self._call(self._switch, SwitchController.Request(
+            activate_controllers=list(activate), deactivate_controllers=list(deactivate), strictness=strictness,
+            timeout=Duration(sec=ns // 1_000_000_000, nanosec=ns % 1_000_000_000)))
+
+    def controllers(self) -> dict:
+        """name -> controller_manager_msgs/ControllerState, in the manager's order."""
+        return {c.name: c for c in self._call(self._list, ListControllers.Request()).controller}
+
+    def states(self) -> dict[str, str]:
+        return {name: c.state for name, c in self.controllers().items()}
+
+    def types(self):
+        return self._call(self._types, ListControllerTypes.Request())
+
+    def hardware(self):
+        return self._call(self._hardware, ListHardwareInterfaces.Request())

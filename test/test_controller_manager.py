@@ -1,0 +1,199 @@
+"""The controller manager's switch rules (ros2_control jazzy), with the UR hardware's mode check."""
+from __future__ import annotations
+
+import pytest
+
+from ur_sim_driver import ur_hardware as hw
+from ur_sim_driver.controller_manager import (
+    ABORT_STRICT,
+    BEST_EFFORT,
+    EMPTY_SWITCH,
+    FORCE_AUTO,
+    HARDWARE_REJECTED,
+    STRICT,
+    SWITCHED,
+    ControllerManager,
+    ControllerSpec,
+)
+
+JOINTS = tuple(f'p_{j}' for j in ('a', 'b', 'c', 'd', 'e', 'f'))
+PREFIX = 'p_'
+POS = hw.joint_interfaces(JOINTS, 'position')
+VEL = hw.joint_interfaces(JOINTS, 'velocity')
+PASS = tuple(i for i in hw.command_interfaces(JOINTS, PREFIX) if 'trajectory_passthrough' in i)
+FREE = tuple(i for i in hw.command_interfaces(JOINTS, PREFIX) if 'freedrive_mode' in i)
+TOOL = (f'{PREFIX}tool_contact/tool_contact_set_state',)
+
+
+def _manager(active=('scaled', 'jsb')) -> ControllerManager:
+    specs = [
+        ControllerSpec('jsb', 'joint_state_broadcaster/JointStateBroadcaster',
+                       state_interfaces=hw.joint_interfaces(JOINTS, 'position', 'velocity', 'effort')),
+        ControllerSpec('scaled', 'ur_controllers/ScaledJointTrajectoryController', POS, stops_with_program=True),
+        ControllerSpec('jtc', 'joint_trajectory_controller/JointTrajectoryController', POS, stops_with_program=True),
+        ControllerSpec('fpc', 'position_controllers/JointGroupPositionController', POS, stops_with_program=True),
+        ControllerSpec('fvc', 'velocity_controllers/JointGroupVelocityController', VEL, stops_with_program=True),
+        ControllerSpec('pass', 'ur_controllers/PassthroughTrajectoryController', PASS, stops_with_program=True),
+        ControllerSpec('free', 'ur_controllers/FreedriveModeController', FREE, unavailable='not emulated yet'),
+        ControllerSpec('tool', 'ur_controllers/ToolContactController', TOOL, stops_with_program=True),
+    ]
+    return ControllerManager(specs, active, lambda s, p, r: hw.prepare_command_mode_switch(s, p, r, PREFIX))
+
+
+def _texts(plan) -> list[str]:
+    return [line.text for line in plan.log]
+
+
+def _switch(cm, activate=(), deactivate=(), strictness=STRICT):
+    plan = cm.plan(activate, deactivate, strictness)
+    if plan.ok:
+        cm.apply(plan)
+    return plan
+
+
+def test_start_states_and_claims():
+    cm = _manager()
+    assert cm.active_names() == ('jsb', 'scaled')
+    assert cm.state('jtc') == 'inactive' and cm.claimed('jtc') == ()
+    assert cm.claimed('scaled') == POS and cm.claimed('jsb') == ()
+    assert set(cm.claimed_interfaces()) == set(POS)
+
+
+def test_plain_switch_deactivates_then_activates():
+    cm = _manager()
+    plan = _switch(cm, activate=['fpc'], deactivate=['scaled'])
+    assert plan.ok and plan.deactivate == ('scaled',) and plan.activate == ('fpc',)
+    assert plan.message == SWITCHED
+    assert cm.active_names() == ('jsb', 'fpc')
+
+
+def test_unknown_name_strict_fails_as_a_whole():
+    cm = _manager()
+    plan = _switch(cm, activate=['nope'], deactivate=['scaled'])
+    assert not plan.ok and cm.is_active('scaled')
+    assert _texts(plan) == ["Could not 'activate' controller with name 'nope' because no controller with this name "
+                            'exists', ABORT_STRICT]
+
+
+def test_unknown_name_best_effort_does_the_rest():
+    cm = _manager()
+    plan = _switch(cm, activate=['nope', 'fpc'], deactivate=['scaled'], strictness=BEST_EFFORT)
+    assert plan.ok and plan.activate == ('fpc',) and cm.is_active('fpc') and not cm.is_active('scaled')
+
+
+def test_activating_an_active_controller():
+    cm = _manager()
+    strict = _switch(cm, activate=['scaled'])
+    assert not strict.ok and "Controller with name 'scaled' is not inactive" in strict.message
+    best = _switch(cm, activate=['scaled'], strictness=BEST_EFFORT)
+    assert best.ok and best.activate == () and _texts(best)[-1] == EMPTY_SWITCH
+    # No restart in jazzy: an active controller in both lists cannot be activated, so STRICT fails...
+    assert not _switch(cm, activate=['scaled'], deactivate=['scaled']).ok
+    # ... and BEST_EFFORT only deactivates it.
+    plan = _switch(cm, activate=['scaled'], deactivate=['scaled'], strictness=BEST_EFFORT)
+    assert plan.ok and plan.deactivate == ('scaled',) and plan.activate == () and not cm.is_active('scaled')
+
+
+def test_deactivating_an_inactive_controller():
+    cm = _manager()
+    strict = _switch(cm, deactivate=['jtc', 'scaled'])
+    assert not strict.ok and cm.is_active('scaled')
+    assert "Controller with name 'jtc' can not be deactivated since it is not active." in _texts(strict)
+    best = _switch(cm, deactivate=['jtc', 'scaled'], strictness=BEST_EFFORT)
+    assert best.ok and best.deactivate == ('scaled',) and not cm.is_active('scaled')
+
+
+def test_conflicting_claims_are_refused():
+    cm = _manager()
+    # scaled keeps its position interfaces: the forward position controller cannot claim them.
+    plan = _switch(cm, activate=['fpc'])
+    assert not plan.ok and not cm.is_active('fpc')
+    assert f"Resource conflict for controller 'fpc'. Command interface '{POS[0]}' is already claimed" in plan.message
+    # Two that claim the same interfaces in one request.
+    _switch(cm, deactivate=['scaled'])
+    assert not _switch(cm, activate=['scaled', 'jtc']).ok
+    assert cm.active_names() == ('jsb',)
+
+
+def test_best_effort_conflict_does_the_possible_part():
+    cm = _manager()
+    _switch(cm, deactivate=['scaled'])
+    plan = _switch(cm, activate=['scaled', 'jtc', 'tool'], strictness=BEST_EFFORT)
+    assert plan.ok and plan.activate == ('scaled', 'tool')
+    assert any('Resource conflict' in t and "'jtc'" in t for t in _texts(plan))
+    assert cm.active_names() == ('jsb', 'scaled', 'tool')
+
+
+def test_hardware_modes_refuse_whatever_the_strictness():
+    cm = _manager()
+    _switch(cm, deactivate=['scaled'])
+    for pair in (['scaled', 'fvc'], ['scaled', 'pass'], ['fpc', 'fvc'], ['fvc', 'pass']):
+        for strictness in (STRICT, BEST_EFFORT):
+            plan = _switch(cm, activate=pair, strictness=strictness)
+            assert not plan.ok, pair
+            assert _texts(plan)[-1] == HARDWARE_REJECTED and 'is not allowed' in _texts(plan)[-2]
+    assert cm.active_names() == ('jsb',)
+    # A running position controller excludes velocity unless it is deactivated in the same request.
+    _switch(cm, activate=['fpc'])
+    assert not _switch(cm, activate=['fvc'], strictness=BEST_EFFORT).ok
+    assert _switch(cm, activate=['fvc'], deactivate=['fpc']).ok
+
+
+def test_tool_contact_runs_beside_position_and_passthrough():
+    cm = _manager(active=())
+    assert _switch(cm, activate=['scaled', 'tool']).ok
+    assert _switch(cm, deactivate=['scaled', 'tool']).ok
+    assert _switch(cm, activate=['pass', 'tool']).ok
+
+
+def test_unavailable_controller_cannot_be_activated():
+    cm = _manager()
+    strict = _switch(cm, activate=['free'], deactivate=['scaled'])
+    assert not strict.ok and 'not emulated yet' in strict.message and cm.is_active('scaled')
+    best = _switch(cm, activate=['free'], deactivate=['scaled'], strictness=BEST_EFFORT)
+    assert best.ok and best.activate == () and not cm.is_active('free')
+
+
+def test_strictness_zero_is_best_effort_and_bad_values_fail():
+    cm = _manager()
+    plan = _switch(cm, activate=['nope'], strictness=0)
+    assert plan.ok and 'Defaulting to BEST_EFFORT' in _texts(plan)[0]
+    assert _switch(cm, activate=['nope'], strictness=FORCE_AUTO).ok  # no chains: as BEST_EFFORT
+    bad = _switch(cm, activate=['fpc'], deactivate=['scaled'], strictness=7)
+    assert not bad.ok and 'strictness = 7' in bad.message and cm.is_active('scaled')
+
+
+def test_empty_request_succeeds():
+    plan = _switch(_manager(), strictness=STRICT)
+    assert plan.ok and plan.message == EMPTY_SWITCH
+
+
+def test_stale_plan_is_refused():
+    cm = _manager()
+    plan = cm.plan(['fpc'], ['scaled'], STRICT)
+    cm.apply(plan)
+    with pytest.raises(ValueError, match='stale switch plan'):
+        cm.apply(plan)
+
+
+def test_stoppable_and_bad_construction():
+    cm = _manager()
+    assert cm.stoppable_active() == ('scaled',)
+    with pytest.raises(ValueError, match='already claimed'):
+        _manager(active=('scaled', 'jtc'))
+    with pytest.raises(ValueError, match='not loaded'):
+        _manager(active=('ghost',))
+    with pytest.raises(ValueError, match='loaded twice'):
+        ControllerManager([ControllerSpec('a', 't'), ControllerSpec('a', 't')])
+
+
+def test_hardware_mode_table():
+    assert hw.mode_of(POS[0], PREFIX) == 'position' and hw.mode_of(VEL[3], PREFIX) == 'velocity'
+    assert hw.mode_of(PASS[0], PREFIX) == 'trajectory_passthrough' and hw.mode_of(FREE[1], PREFIX) == 'freedrive_mode'
+    assert hw.mode_of(f'{PREFIX}gpio/tool_voltage_cmd', PREFIX) is None
+    assert hw.compatible('position', 'tool_contact') and hw.compatible('force_mode', 'trajectory_passthrough')
+    assert not hw.compatible('freedrive_mode', 'tool_contact') and not hw.compatible('position', 'velocity')
+    assert hw.prepare_command_mode_switch(VEL, POS, POS, PREFIX) is None
+    assert hw.prepare_command_mode_switch(VEL, (), POS, PREFIX) == \
+        'Starting velocity together with position is not allowed.'
+    assert set(POS) | set(VEL) <= set(hw.command_interfaces(JOINTS, PREFIX))

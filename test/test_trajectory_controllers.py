@@ -1,0 +1,106 @@
+"""The two trajectory controllers over DDS: joint_trajectory_controller ignores the robot's speed scaling where
+the scaled one follows it; both answer ~/query_state."""
+from __future__ import annotations
+
+import numpy as np
+import pytest
+from action_msgs.msg import GoalStatus
+from cm_helpers import BEST_EFFORT, ControllerManagerClient
+from control_msgs.action import FollowJointTrajectory
+from control_msgs.msg import JointTrajectoryControllerState
+from control_msgs.srv import QueryTrajectoryState
+from rclpy.callback_groups import ReentrantCallbackGroup
+from sim_harness import point, running_sim, wait_for
+
+from ur_glue_planner.execution.action_client import ActionClient
+from ur_sim_driver import conversions as conv
+from ur_sim_driver import result_codes as rc
+
+SCALED, JTC = 'scaled_joint_trajectory_controller', 'joint_trajectory_controller'
+ZERO = [0.0] * 6
+
+
+@pytest.fixture(scope='module')
+def robot():
+    with running_sim() as h:
+        h.cm = ControllerManagerClient(h)
+        group = ReentrantCallbackGroup()
+        h.actions = {SCALED: h.action, JTC: ActionClient(h.client, FollowJointTrajectory,
+                                                         f'/{JTC}/follow_joint_trajectory', callback_group=group)}
+        h.query = {name: h.client.create_client(QueryTrajectoryState, f'/{name}/query_state', callback_group=group)
+                   for name in (SCALED, JTC)}
+        wait_for(h.actions[JTC].server_is_ready, what='the unscaled action server')
+        for client in h.query.values():
+            wait_for(client.service_is_ready, what='query_state')
+        yield h
+
+
+def _run(h, name, goal):
+    future = h.actions[name].send_goal_async(goal)
+    wait_for(future.done, what='the goal response')
+    handle = future.result()
+    assert handle.accepted
+    return handle
+
+
+def _query(h, name, t):
+    future = h.query[name].call_async(QueryTrajectoryState.Request(time=conv.sec_to_time(t)))
+    wait_for(future.done, what='query_state')
+    return future.result()
+
+
+def test_one_rad_in_half_a_second_scaled_slows_down_unscaled_violates_the_path(robot):
+    h = robot
+    h.cm.switch(activate=[SCALED], deactivate=[JTC], strictness=BEST_EFFORT)
+    q0 = h.q
+    scaling: list[float] = []
+    h.record()
+    handle = _run(h, SCALED, h.goal([point(q0 - 1.0, 0.5)]))
+    assert h.result(handle)[:2] == (GoalStatus.STATUS_SUCCEEDED, rc.SUCCESSFUL)
+    scaling = h.stop_recording().speed_scaling
+    assert min(scaling) < 90.0  # the robot slowed itself, and the scaled controller waited for it
+    assert h.cm.switch(activate=[JTC], deactivate=[SCALED]).ok
+    states: list[float] = []
+    h.listen(JointTrajectoryControllerState, f'/{JTC}/controller_state',
+             lambda m: states.append(m.speed_scaling_factor), depth=10)
+    handle = _run(h, JTC, h.goal([point(h.q + 1.0, 0.5)]))
+    status, code, _ = h.result(handle)
+    assert (status, code) == (GoalStatus.STATUS_ABORTED, rc.PATH_TOLERANCE_VIOLATED)
+    wait_for(lambda: states, what='the unscaled controller state')
+    assert set(states) == {1.0}
+    h.cm.switch(activate=[SCALED], deactivate=[JTC])
+
+
+def test_speed_scaling_input_belongs_to_the_scaled_controller(robot):
+    h = robot
+    h.cm.switch(activate=[JTC], deactivate=[SCALED], strictness=BEST_EFFORT)
+    from control_msgs.msg import SpeedScalingFactor
+    h.scaling.publish(SpeedScalingFactor(factor=0.0))  # would pause the scaled controller
+    wait_for(lambda: h.sim.jtc.speed_scaling == 0.0, what='the input')
+    q0 = h.q
+    handle = _run(h, JTC, h.goal([point(q0 + 0.2, 1.0, ZERO)]))
+    assert h.result(handle)[1] == rc.SUCCESSFUL
+    assert np.abs(h.q - (q0 + 0.2)).max() < 0.02
+    h.scaling.publish(SpeedScalingFactor(factor=1.0))
+    wait_for(lambda: h.sim.jtc.speed_scaling == 1.0, what='the input')
+    h.cm.switch(activate=[SCALED], deactivate=[JTC])
+
+
+def test_query_state(robot):
+    h = robot
+    h.cm.switch(activate=[SCALED], deactivate=[JTC], strictness=BEST_EFFORT)
+    inactive = _query(h, JTC, 0.0)
+    assert not inactive.success and 'not active' in inactive.message
+    wait_for(lambda: h.sim.jtc.trajectory is None, what='no trajectory')
+    assert not _query(h, SCALED, 0.0).success
+    q0 = h.q
+    target = q0 + np.array([0.4, 0, 0, 0, 0, 0])
+    handle = _run(h, SCALED, h.goal([point(target, 4.0, ZERO)]))
+    wait_for(lambda: h.sim.jtc.trajectory is not None, what='the trajectory')
+    start = h.sim.jtc.trajectory.start_time
+    answer = _query(h, SCALED, start + 4.0)
+    assert answer.success and list(answer.name) == h.joints
+    assert np.allclose(answer.position, target, atol=1e-9) and np.allclose(answer.velocity, 0.0, atol=1e-9)
+    mid = _query(h, SCALED, start + 2.0)
+    assert mid.success and abs(mid.position[0] - (q0[0] + 0.2)) < 0.01 and mid.velocity[0] > 0.1
+    assert h.result(handle)[1] == rc.SUCCESSFUL

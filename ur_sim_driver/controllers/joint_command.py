@@ -1,0 +1,64 @@
+"""What a controller that moves the arm gives the robot every control cycle, and what the robot does without one.
+
+In ros2_control such a controller writes the joints' command interfaces (``<joint>/position`` or ``/velocity``);
+the UR hardware turns them into the robot's motion. Here the active one hands the robot's servo a reference
+(:class:`~ur_sim_driver.trajectory.TrajectorySample`) and the position it must not pass, from the simulation
+loop under the simulation lock. The controller manager lets at most one be active (they claim the same joints'
+interfaces, or modes the hardware cannot run together); with none active the robot holds where it is
+(:class:`HoldPosition`), as the UR hardware keeps its last position command.
+"""
+from __future__ import annotations
+
+import numpy as np
+
+from ur_sim_driver.controllers.base import Component
+from ur_sim_driver.physics import ArmState
+from ur_sim_driver.trajectory import TrajectorySample
+
+
+class JointCommander:
+    """The commanding half of a controller (or the robot's own hold)."""
+
+    def take_over(self, state: ArmState) -> None:
+        """It commands the robot from this cycle on; `state` is the measured state now (under the lock).
+        (Controllers set themselves up in their activate hook, which may run between cycles.)"""
+
+    def command(self, state: ArmState, period: float) -> tuple[TrajectorySample, np.ndarray | None]:
+        """One control cycle under the lock: (the reference for the robot's servo, the stop position or None).
+
+        Args:
+            state: the measured state at the start of the cycle.
+            period: the control period [s].
+        """
+        raise NotImplementedError
+
+
+class JointCommandController(Component, JointCommander):
+    """A controller that claims joint command interfaces (trajectory and forward controllers).
+
+    Attributes:
+        stop_reason: set by the controller_stopper before it deactivates the controller: why the robot cannot move
+            (None when a switch_controller request deactivates it).
+    """
+
+    initially_active = False
+
+    def __init__(self) -> None:
+        super().__init__()
+        self.stop_reason: str | None = None
+
+
+class HoldPosition(JointCommander):
+    """The robot without an active joint controller: it holds the measured position where the last one left."""
+
+    def __init__(self) -> None:
+        self._sample: TrajectorySample | None = None
+
+    def take_over(self, state: ArmState) -> None:
+        zero = np.zeros_like(state.q)
+        self._sample = TrajectorySample(state.q.copy(), zero, zero.copy(), 0, True)
+
+    def command(self, state: ArmState, period: float) -> tuple[TrajectorySample, np.ndarray | None]:
+        if self._sample is None:
+            self.take_over(state)
+        return self._sample, self._sample.positions

@@ -1,0 +1,210 @@
+"""scaled_joint_trajectory_controller and joint_trajectory_controller: the JTC as a controller of ur_sim.
+
+The per-cycle logic is ``jtc.py`` (trajectory, tolerances, goal supervision); this module gives it the
+controller's lifecycle and its interfaces. ``~/follow_joint_trajectory`` and ``~/joint_trajectory`` are served by
+the gateway process (``trajectory_gateway.py``, one node per controller there) so that receiving a large goal
+never stalls the simulation loop; this side executes what the gateway hands over and serves, on the controller's
+own node in this process, ``~/controller_state`` (every cycle while active), ``~/query_state``
+(control_msgs/srv/QueryTrajectoryState) and, for the scaled controller, ``~/speed_scaling_input``.
+
+The scaled controller advances trajectory time by the robot's speed scaling; joint_trajectory_controller does
+not (``scaled=False``): it runs on real time whatever the robot makes of it, so a motion the robot must slow
+down for ends in a path tolerance violation instead of being stretched.
+
+Deactivated (by switch_controller or by the controller_stopper), the controller holds the measured position
+and ends its goal aborted (INVALID_GOAL); an inactive controller refuses goals and messages with upstream's
+words (the gateway learns each switch before switch_controller answers).
+"""
+from __future__ import annotations
+
+import threading
+
+import numpy as np
+from control_msgs.msg import JointTrajectoryControllerState, SpeedScalingFactor
+from control_msgs.srv import QueryTrajectoryState
+from rclpy.callback_groups import MutuallyExclusiveCallbackGroup
+from rclpy.node import Node
+
+from ur_sim_driver import conversions as conv
+from ur_sim_driver import result_codes
+from ur_sim_driver.controllers.base import Cycle, Host
+from ur_sim_driver.controllers.joint_command import JointCommandController
+from ur_sim_driver.errors import TrajectoryError
+from ur_sim_driver.gateway_link import Cancel, Canceled, Ended, Feedback, GatewayLink, Start
+from ur_sim_driver.jtc import Outcome, TrajectoryController
+from ur_sim_driver.physics import ArmState
+from ur_sim_driver.sim_config import SimConfig
+from ur_sim_driver.trajectory import TrajectorySample
+from ur_sim_driver.trajectory_gateway import INACTIVE_GOAL, INACTIVE_TOPIC
+from ur_sim_driver.ur_hardware import joint_interfaces, prefixed_joints
+from ur_sim_driver.validation import map_to_config_order
+
+SCALED_TYPE = 'ur_controllers/ScaledJointTrajectoryController'
+UNSCALED_TYPE = 'joint_trajectory_controller/JointTrajectoryController'
+DEACTIVATED = 'Current goal cancelled during deactivate transition.'  # upstream's words; the goal is aborted here
+QUERY_INACTIVE = "Can't sample trajectory. Controller is not active."
+QUERY_NO_TRAJECTORY = 'Currently there is no valid trajectory instance.'
+
+
+class JointTrajectoryControllerComponent(JointCommandController):
+    """One trajectory controller.
+
+    Args:
+        name: the controller's name.
+        core: its per-cycle logic (sharing the robot's speed scaling with the other controllers).
+        link: the gateway link serving its action and topic.
+        feedback_every: publish action feedback every this many cycles.
+        initially_active: active after start (the driver starts the scaled one).
+    """
+
+    def __init__(self, name: str, core: TrajectoryController, link: GatewayLink, feedback_every: int,
+                 initially_active: bool = False) -> None:
+        super().__init__()
+        self.name = name
+        self.core = core
+        self.scaled = core.scaled
+        self.type_name = SCALED_TYPE if core.scaled else UNSCALED_TYPE
+        self.initially_active = initially_active
+        self._link = link
+        self._feedback_every = max(1, feedback_every)
+        self._token = None
+        self._settled: threading.Event | None = None
+
+    def interfaces(self, cfg: SimConfig) -> tuple[tuple[str, ...], tuple[str, ...]]:
+        joints = prefixed_joints(cfg.joints, cfg.tf_prefix)
+        state = joint_interfaces(joints, 'position', 'velocity')
+        if self.scaled:
+            state += (f'{cfg.tf_prefix}speed_scaling/speed_scaling_factor',)
+        return joint_interfaces(joints, 'position'), state
+
+    def on_configure(self, host: Host, node: Node) -> None:
+        p = host.cfg.prefixed
+        self._pub_state = node.create_publisher(JointTrajectoryControllerState, p(f'{self.name}/controller_state'),
+                                                10)
+        node.create_service(QueryTrajectoryState, p(f'{self.name}/query_state'), self._on_query,
+                            callback_group=MutuallyExclusiveCallbackGroup())
+        if self.scaled:
+            node.create_subscription(SpeedScalingFactor, p(f'{self.name}/speed_scaling_input'),
+                                     self._on_speed_scaling, 10, callback_group=MutuallyExclusiveCallbackGroup())
+        self._state_msg = JointTrajectoryControllerState(joint_names=list(self.core.joint_names))
+
+    # ---- lifecycle (simulation loop, under the lock) --------------------------------------------------------------
+    def on_activate(self) -> None:
+        self.stop_reason = None
+        self.core.hold(self.host.sim.state().q)  # upstream holds the current position on activation
+        self._settled = self._link.activation(self.name, True)
+
+    def on_deactivate(self) -> None:
+        token = self.core.active_token
+        self.core.hold(self.host.sim.state().q)
+        if token is not None:
+            reason = DEACTIVATED if self.stop_reason is None else \
+                f'the controller was deactivated: {self.stop_reason}'
+            self._finish(Outcome(token, result_codes.INVALID_GOAL, reason))
+        self._token = None
+        self._settled = self._link.activation(self.name, False)
+
+    def wait_settled(self, timeout: float) -> bool:
+        """Wait until the gateway applied the last switch of this controller (False on timeout)."""
+        event = self._settled
+        return event is None or event.wait(timeout)
+
+    def command(self, state: ArmState, period: float) -> tuple[TrajectorySample, np.ndarray | None]:
+        sample, outcome = self.core.update(state.t, period, state.q, state.qd)
+        if outcome is not None:
+            self._finish(outcome)
+        self._token = self.core.active_token
+        return sample, self.core.stop
+
+    # ---- every cycle while active (simulation loop, outside the lock) ---------------------------------------------
+    def update(self, cycle: Cycle) -> None:
+        state, sample = cycle.state, cycle.reference
+        st = self._state_msg
+        st.header.stamp = cycle.stamp
+        conv.fill_point(st.reference, sample.positions, sample.velocities, sample.accelerations)
+        conv.fill_point(st.feedback, state.q, state.qd)
+        conv.fill_point(st.error, sample.positions - state.q, sample.velocities - state.qd)
+        conv.fill_point(st.output, sample.positions, sample.velocities, effort=cycle.effort)
+        # The controller reports the factor it advances trajectory time by; the broadcaster the robot's own.
+        st.speed_scaling_factor = cycle.total_factor if self.scaled else 1.0
+        self._pub_state.publish(st)
+        token = self._token
+        if token is not None and cycle.index % self._feedback_every == 0:
+            self._link.send(Feedback(token, state.t, (sample.positions, sample.velocities, sample.accelerations),
+                                     (state.q, state.qd),
+                                     (sample.positions - state.q, sample.velocities - state.qd)))
+
+    # ---- from the gateway (its receiving thread) -----------------------------------------------------------------
+    def on_gateway(self, message: object) -> None:
+        """A trajectory or cancel for this controller."""
+        host = self.host
+        if isinstance(message, Start):
+            try:
+                # Mapping a long trajectory is done outside the lock the loop needs every cycle.
+                points = map_to_config_order(message.command, self.core.joint_names, self._hold_reference())
+            except TrajectoryError as exc:  # validated in the gateway: only a bug gets here
+                self.node.get_logger().error(f'trajectory not started: {exc}')
+                return
+            preempted = None
+            with host.lock:
+                refusal = host.robot.motion_refusal()
+                if refusal is not None:  # the controller_stopper keeps it inactive: say why
+                    refusal = f'the controller is not running: {refusal}'
+                elif not self.active:
+                    refusal = INACTIVE_GOAL if message.token is not None else INACTIVE_TOPIC
+                else:
+                    state = host.sim.state()
+                    preempted = self.core.start(points, state.t, state.q, state.qd, token=message.token,
+                                                tolerances=message.tolerances)
+                    self._token = self.core.active_token
+            if refusal is not None:  # a topic message, or a goal accepted while the state changed
+                if message.token is not None:
+                    self._finish(Outcome(message.token, result_codes.INVALID_GOAL, refusal))
+                else:
+                    self.node.get_logger().warning(f'Dropped JointTrajectory message: {refusal}')
+                return
+            if preempted is not None:
+                self._finish(preempted)
+        elif isinstance(message, Cancel):
+            with host.lock:
+                ok = self.core.cancel(message.token, host.sim.state().q)
+                self._token = self.core.active_token
+            self._link.send(Canceled(message.token, ok))
+
+    # ---- ROS callbacks (executor threads) -------------------------------------------------------------------------
+    def _on_speed_scaling(self, msg: SpeedScalingFactor) -> None:
+        f = msg.factor
+        if not (0.0 <= f <= 1.0):
+            self.node.get_logger().error(f'Ignored speed_scaling_input: factor = {f} is outside [0.0, 1.0]; '
+                                         f'keeping {self.core.speed_scaling}')
+            return
+        with self.host.lock:
+            self.core.speed_scaling = float(f)
+
+    def _on_query(self, request: QueryTrajectoryState.Request,
+                  response: QueryTrajectoryState.Response) -> QueryTrajectoryState.Response:
+        t = conv.time_to_sec(request.time)
+        with self.host.lock:
+            active, trajectory = self.active, self.core.trajectory
+            sample = trajectory.sample(t) if active and trajectory is not None else None
+        if sample is None:
+            response.success = False
+            response.message = QUERY_INACTIVE if not active else QUERY_NO_TRAJECTORY
+            self.node.get_logger().error(response.message)
+            return response
+        response.success = True
+        response.name = list(self.core.joint_names)
+        response.position = conv.float_array(sample.positions)
+        response.velocity = conv.float_array(sample.velocities)
+        response.acceleration = conv.float_array(sample.accelerations)
+        return response
+
+    # ---- helpers -------------------------------------------------------------------------------------------------
+    def _hold_reference(self) -> np.ndarray:
+        # Joints a partial goal leaves out keep their current command (upstream), else the measured position.
+        sample = self.core.last_sample
+        return sample.positions.copy() if sample is not None else self.host.sim.state().q
+
+    def _finish(self, outcome: Outcome) -> None:
+        if outcome.token is not None:
+            self._link.send(Ended(outcome.token, outcome.code, outcome.message))
