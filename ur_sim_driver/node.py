@@ -27,6 +27,7 @@ from rosgraph_msgs.msg import Clock
 from ur_sim_driver import conversions as conv
 from ur_sim_driver.controllers.base import Component, Cycle, Host
 from ur_sim_driver.controllers.controller_manager_node import ControllerManagerNode
+from ur_sim_driver.controllers.dispenser import SimulatedDispenser
 from ur_sim_driver.controllers.force_torque_sensor_broadcaster import ForceTorqueSensorBroadcaster
 from ur_sim_driver.controllers.forward_command import ForwardCommandController
 from ur_sim_driver.controllers.io_and_status import IoAndStatusController
@@ -117,7 +118,7 @@ class UrSimNode(Node):
         self.components: list[Component] = [
             JointStateBroadcaster(), SpeedScalingStateBroadcaster(), TcpPoseBroadcaster(),
             IoAndStatusController(), UrConfigurationController(), DashboardClient(), SimulatedInputs(),
-            ForceTorqueSensorBroadcaster(), RobotStatePublisher(),
+            ForceTorqueSensorBroadcaster(), RobotStatePublisher(), SimulatedDispenser(),
             *self._trajectory.values(), ForwardCommandController('position'), ForwardCommandController('velocity'),
             *not_emulated_controllers()]
         for component in self.components:
