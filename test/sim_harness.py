@@ -188,6 +188,17 @@ class SimHarness:
         wait_for(lambda: self.sim.sim.time >= t_end, what=f'{dt} s of simulated time')
 
 
+def _flatten(params: dict, prefix: str = '') -> dict:
+    """Nested parameter mappings (as in a params file) as ROS names: {'dispenser': {'pin': 16}} -> dispenser.pin."""
+    flat = {}
+    for key, value in params.items():
+        if isinstance(value, dict):
+            flat.update(_flatten(value, f'{prefix}{key}.'))
+        else:
+            flat[f'{prefix}{key}'] = value
+    return flat
+
+
 def _param(name, value) -> Parameter:
     return Parameter(name, value=value)
 
@@ -197,7 +208,7 @@ def running_sim(**params) -> Iterator[SimHarness]:
     """ur_sim (as fast as possible unless `real_time_factor` is given) with a client, on a private context."""
     params.setdefault('real_time_factor', 0.0)
     with ros_context() as ctx:
-        sim = UrSimNode(context=ctx, parameter_overrides=[_param(k, v) for k, v in params.items()])
+        sim = UrSimNode(context=ctx, parameter_overrides=[_param(k, v) for k, v in _flatten(params).items()])
         client = Node('test_client', context=ctx)
         executor = MultiThreadedExecutor(num_threads=4, context=ctx)
         for node in sim.nodes():
