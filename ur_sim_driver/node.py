@@ -29,11 +29,11 @@ from ur_sim_driver.controllers.base import Component, Cycle, Host
 from ur_sim_driver.controllers.controller_manager_node import ControllerManagerNode
 from ur_sim_driver.controllers.force_torque_sensor_broadcaster import ForceTorqueSensorBroadcaster
 from ur_sim_driver.controllers.forward_command import ForwardCommandController
+from ur_sim_driver.controllers.freedrive_mode import FreedriveModeController
 from ur_sim_driver.controllers.io_and_status import IoAndStatusController
 from ur_sim_driver.controllers.joint_command import HoldPosition, JointCommandController, JointCommander
 from ur_sim_driver.controllers.joint_state_broadcaster import JointStateBroadcaster
 from ur_sim_driver.controllers.joint_trajectory import JointTrajectoryControllerComponent
-from ur_sim_driver.controllers.not_emulated import not_emulated_controllers
 from ur_sim_driver.controllers.passthrough_trajectory import PassthroughTrajectoryController
 from ur_sim_driver.controllers.speed_scaling_state_broadcaster import SpeedScalingStateBroadcaster
 from ur_sim_driver.controllers.tcp_pose_broadcaster import TcpPoseBroadcaster
@@ -49,6 +49,7 @@ from ur_sim_driver.robot_state_publisher import RobotStatePublisher
 from ur_sim_driver.safety import contact_cause, limit_cause
 from ur_sim_driver.sim_config import SimConfig, sim_config_from_params
 from ur_sim_driver.sim_io import SimulatedInputs
+from ur_sim_driver.sim_wrench import AppliedWrenches
 from ur_sim_driver.simulator import Simulator
 from ur_sim_driver.speed_scaling import RobotSpeedScaling
 from ur_sim_driver.tolerances import default_tolerances
@@ -128,7 +129,7 @@ class UrSimNode(Node):
             IoAndStatusController(), UrConfigurationController(), DashboardClient(), SimulatedInputs(),
             ForceTorqueSensorBroadcaster(), RobotStatePublisher(),
             *self._trajectory.values(), ForwardCommandController('position'), ForwardCommandController('velocity'),
-            self._passthrough, *not_emulated_controllers(), self._tool_contact]
+            self._passthrough, FreedriveModeController(), self._tool_contact, AppliedWrenches()]
         for component in self.components:
             component.configure(self.host)
             if component.initially_active:
@@ -245,7 +246,10 @@ class UrSimNode(Node):
             sample, stop = commander.command(state, self.sim.control_dt)
             tcp_position, tcp_orientation = self.sim.tcp_pose()
             wrench = self.sim.wrench()
-            tau = self.sim.advance(state, sample, stop)
+            if getattr(commander, 'free', False):  # freedrive: the robot compensates gravity, the arm is free
+                tau = self.sim.advance_free(state)
+            else:
+                tau = self.sim.advance(state, sample, stop)
             contacts = self.sim.physics.contacts()
             if self._tool_contact.watching:
                 halted = self._tool_contact.detect(contacts, self.sim.time)
