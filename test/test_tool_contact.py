@@ -154,6 +154,29 @@ def test_touching_the_glass_with_a_goal_stops_within_one_period_without_protecti
     assert np.abs(h.q - q).max() < 1e-3
 
 
+def test_a_passthrough_trajectory_is_aborted_by_the_robot(scene):
+    h, seg, cm, tc = scene
+    move_to_start(h, seg)
+    passthrough = 'passthrough_trajectory_controller'
+    assert cm.switch(activate=[passthrough], deactivate=['scaled_joint_trajectory_controller']).ok
+    client = ActionClient(h.client, FollowJointTrajectory, f'/{passthrough}/follow_joint_trajectory',
+                          callback_group=ReentrantCallbackGroup())
+    wait_for(client.server_is_ready, what='the passthrough server')
+    contact_goal = tc.send()
+    assert contact_goal.accepted
+    future = client.send_goal_async(goal_of(h, seg))
+    wait_for(future.done, what='the passthrough goal response')
+    handle = future.result()
+    assert handle.accepted
+    result = handle.get_result_async()
+    wait_for(result.done, what='the passthrough result')
+    # Upstream's "aborted by hardware": status aborted, the result left empty.
+    assert (result.result().status, result.result().result.error_code) == (GoalStatus.STATUS_ABORTED, 0)
+    assert tc.status(contact_goal) == GoalStatus.STATUS_SUCCEEDED
+    assert h.sim.robot.safety_mode == NORMAL
+    assert cm.switch(activate=['scaled_joint_trajectory_controller'], deactivate=[passthrough]).ok
+
+
 def test_without_a_goal_the_same_move_ends_in_a_protective_stop(scene):
     h, seg, cm, tc = scene
     move_to_start(h, seg)
