@@ -27,6 +27,7 @@ from rosgraph_msgs.msg import Clock
 from ur_sim_driver import conversions as conv
 from ur_sim_driver.controllers.base import Component, Cycle, Host
 from ur_sim_driver.controllers.controller_manager_node import ControllerManagerNode
+from ur_sim_driver.controllers.dispenser import SimulatedDispenser
 from ur_sim_driver.controllers.force_torque_sensor_broadcaster import ForceTorqueSensorBroadcaster
 from ur_sim_driver.controllers.forward_command import ForwardCommandController
 from ur_sim_driver.controllers.freedrive_mode import FreedriveModeController
@@ -127,7 +128,7 @@ class UrSimNode(Node):
         self.components: list[Component] = [
             JointStateBroadcaster(), SpeedScalingStateBroadcaster(), TcpPoseBroadcaster(),
             IoAndStatusController(), UrConfigurationController(), DashboardClient(), SimulatedInputs(),
-            ForceTorqueSensorBroadcaster(), RobotStatePublisher(),
+            ForceTorqueSensorBroadcaster(), RobotStatePublisher(), SimulatedDispenser(),
             *self._trajectory.values(), ForwardCommandController('position'), ForwardCommandController('velocity'),
             self._passthrough, FreedriveModeController(), self._tool_contact, AppliedWrenches()]
         for component in self.components:
