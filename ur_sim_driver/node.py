@@ -251,8 +251,10 @@ class UrSimNode(Node):
                 tau = self.sim.advance_free(state)
             else:
                 tau = self.sim.advance(state, sample, stop)
-            contacts = self.sim.physics.contacts()
-            if self._tool_contact.watching:
+            # Contacts are read only when something looks at them (they cost a force computation each).
+            watching = self._tool_contact.watching
+            contacts = self.sim.physics.contacts() if watching or self.robot.safety_mode != PROTECTIVE_STOP else ()
+            if watching:
                 halted = self._tool_contact.detect(contacts, self.sim.time)
                 if halted is not None:  # the robot cancels the motion: the next cycle brakes
                     commander.halt(self.sim.state().q, halted)
