@@ -121,11 +121,16 @@ def test_strict_fails_as_a_whole_and_best_effort_does_the_possible_part(robot):
     assert states[JTC] == 'active' and states[SCALED] == 'inactive' and states[FPC] == 'inactive'
 
 
-def test_controllers_not_emulated_are_listed_but_refuse_activation(robot):
-    response = robot.cm.switch(activate=[TOOL])
-    assert not response.ok and 'ur_sim does not emulate this controller yet' in response.message
-    assert robot.cm.switch(activate=[TOOL], strictness=BEST_EFFORT).ok
-    assert robot.cm.states()[TOOL] == 'inactive'
+def test_tool_contact_runs_beside_the_joint_controller_and_freedrive_alone(robot):
+    cm = robot.cm
+    assert cm.switch(activate=[TOOL]).ok  # its own interface only: no conflict with the scaled JTC
+    assert _active(robot) >= {SCALED, TOOL}
+    assert list(cm.controllers()[TOOL].claimed_interfaces) == ['my_ur_tool_contact/tool_contact_set_state']
+    refused = cm.switch(activate=[FREE], deactivate=[SCALED])  # freedrive does not run beside tool contact
+    assert not refused.ok and cm.states()[FREE] == 'inactive'
+    assert cm.switch(activate=[FREE], deactivate=[SCALED, TOOL]).ok
+    assert cm.states()[FREE] == 'active'
+    assert cm.switch(activate=[SCALED], deactivate=[FREE]).ok
 
 
 def test_strictness_and_timeout_fields(robot):

@@ -16,8 +16,8 @@ ros2_control jazzy's ``ControllerManager::switch_controller`` (facts read from c
   strictness;
 * a switch deactivates first, then activates, between two control cycles.
 
-Besides, ur_sim lists some of the driver's controllers whose behaviour it does not emulate yet
-(:attr:`ControllerSpec.unavailable`): activating one is refused like an impossible activation, naming why.
+Besides, a controller may be unavailable on this robot (:attr:`ControllerSpec.unavailable`, e.g. tool contact on
+a CB3): activating one is refused like an impossible activation, naming why.
 """
 from __future__ import annotations
 

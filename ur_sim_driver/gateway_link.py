@@ -39,6 +39,7 @@ from multiprocessing.connection import Connection
 import numpy as np
 
 from ur_sim_driver.command_arrays import CommandArrays
+from ur_sim_driver.passthrough import PassthroughTolerances
 from ur_sim_driver.trajectory_types import SegmentTolerances
 
 
@@ -56,6 +57,8 @@ class GatewayConfig:
         allow_partial: upstream allow_partial_joints_goal.
         allow_nonzero_end_velocity: upstream allow_nonzero_velocity_at_trajectory_end.
         defaults: the controller's default tolerances (resolved with each goal's in the gateway).
+        passthrough: the controllers among `controllers` served with passthrough_trajectory_controller's rules
+            (``passthrough.py``; no joint_trajectory topic).
     """
 
     controllers: tuple[str, ...]
@@ -69,15 +72,17 @@ class GatewayConfig:
     allow_partial: bool
     allow_nonzero_end_velocity: bool
     defaults: SegmentTolerances
+    passthrough: tuple[str, ...] = ()
 
 
 @dataclass(frozen=True, eq=False)
 class Start:
-    """Replace `controller`'s active trajectory. `token` names an action goal; None for a topic message."""
+    """Replace `controller`'s active trajectory. `token` names an action goal; None for a topic message.
+    `tolerances` are a passthrough controller's ``PassthroughTolerances``."""
 
     token: bytes | None
     command: CommandArrays
-    tolerances: SegmentTolerances | None
+    tolerances: SegmentTolerances | PassthroughTolerances | None
     controller: str = ''
 
 
@@ -107,11 +112,13 @@ class Ack:
 
 @dataclass(frozen=True)
 class Ended:
-    """Goal `token` ended with `code` (control_msgs result code) and `message`."""
+    """Goal `token` ended with `code` (control_msgs result code) and `message`; `aborted` ends it aborted even
+    with code 0 (SUCCESSFUL), as upstream's passthrough controller does when the robot aborts the trajectory."""
 
     token: Hashable
     code: int
     message: str
+    aborted: bool = False
 
 
 @dataclass(frozen=True)

@@ -30,13 +30,15 @@ from ur_sim_driver.controllers.controller_manager_node import ControllerManagerN
 from ur_sim_driver.controllers.dispenser import SimulatedDispenser
 from ur_sim_driver.controllers.force_torque_sensor_broadcaster import ForceTorqueSensorBroadcaster
 from ur_sim_driver.controllers.forward_command import ForwardCommandController
+from ur_sim_driver.controllers.freedrive_mode import FreedriveModeController
 from ur_sim_driver.controllers.io_and_status import IoAndStatusController
 from ur_sim_driver.controllers.joint_command import HoldPosition, JointCommandController, JointCommander
 from ur_sim_driver.controllers.joint_state_broadcaster import JointStateBroadcaster
 from ur_sim_driver.controllers.joint_trajectory import JointTrajectoryControllerComponent
-from ur_sim_driver.controllers.not_emulated import not_emulated_controllers
+from ur_sim_driver.controllers.passthrough_trajectory import PassthroughTrajectoryController
 from ur_sim_driver.controllers.speed_scaling_state_broadcaster import SpeedScalingStateBroadcaster
 from ur_sim_driver.controllers.tcp_pose_broadcaster import TcpPoseBroadcaster
+from ur_sim_driver.controllers.tool_contact import ToolContactController
 from ur_sim_driver.controllers.ur_configuration import UrConfigurationController
 from ur_sim_driver.dashboard import DashboardClient
 from ur_sim_driver.errors import UrSimError
@@ -48,6 +50,7 @@ from ur_sim_driver.robot_state_publisher import RobotStatePublisher
 from ur_sim_driver.safety import contact_cause, limit_cause
 from ur_sim_driver.sim_config import SimConfig, sim_config_from_params
 from ur_sim_driver.sim_io import SimulatedInputs
+from ur_sim_driver.sim_wrench import AppliedWrenches
 from ur_sim_driver.simulator import Simulator
 from ur_sim_driver.speed_scaling import RobotSpeedScaling
 from ur_sim_driver.tolerances import default_tolerances
@@ -98,7 +101,8 @@ class UrSimNode(Node):
         trajectory_names = (ctrl,) if ctrl == UNSCALED_CONTROLLER else (ctrl, UNSCALED_CONTROLLER)
         self._trajectory: dict[str, JointTrajectoryControllerComponent] = {}
         self.gateway = GatewayLink(GatewayConfig(
-            controllers=trajectory_names, active=(ctrl,), namespace=self.cfg.namespace, joints=self.joints,
+            controllers=(*trajectory_names, PassthroughTrajectoryController.name), active=(ctrl,),
+            passthrough=(PassthroughTrajectoryController.name,), namespace=self.cfg.namespace, joints=self.joints,
             q_min=params.q_min, q_max=params.q_max, v_max=params.v_max, strict_limits=self.cfg.strict_limit_checks,
             allow_partial=self.cfg.allow_partial_joints_goal,
             allow_nonzero_end_velocity=self.cfg.allow_nonzero_velocity_at_trajectory_end,
@@ -115,12 +119,18 @@ class UrSimNode(Node):
                                         scaling=self.scaling, scaled=name == ctrl)
             self._trajectory[name] = JointTrajectoryControllerComponent(name, core, self.gateway, feedback_every,
                                                                         initially_active=name == ctrl)
+        # The robot's own interpolation for the passthrough controller: the JTC's sampler, scaled by the robot.
+        self._passthrough = PassthroughTrajectoryController(
+            TrajectoryController(self.joints, self._defaults, self.sim.state().q, params.v_max, self.sim.a_max,
+                                 scaling=self.scaling, scaled=True), self.gateway)
+        self._gateway_controllers = {**self._trajectory, self._passthrough.name: self._passthrough}
+        self._tool_contact = ToolContactController()
         self.components: list[Component] = [
             JointStateBroadcaster(), SpeedScalingStateBroadcaster(), TcpPoseBroadcaster(),
             IoAndStatusController(), UrConfigurationController(), DashboardClient(), SimulatedInputs(),
             ForceTorqueSensorBroadcaster(), RobotStatePublisher(), SimulatedDispenser(),
             *self._trajectory.values(), ForwardCommandController('position'), ForwardCommandController('velocity'),
-            *not_emulated_controllers()]
+            self._passthrough, FreedriveModeController(), self._tool_contact, AppliedWrenches()]
         for component in self.components:
             component.configure(self.host)
             if component.initially_active:
@@ -164,7 +174,7 @@ class UrSimNode(Node):
     # ---- from the gateway process (its receiving thread) -------------------------------------------------------
     def _on_gateway(self, message: object) -> None:
         """A trajectory or cancel for one of the trajectory controllers."""
-        controller = self._trajectory.get(message.controller)
+        controller = self._gateway_controllers.get(message.controller)
         if controller is None:  # only a bug gets here: the gateway serves exactly these controllers
             self.get_logger().error(f'gateway message for unknown controller {message.controller!r}')
             return
@@ -237,8 +247,18 @@ class UrSimNode(Node):
             sample, stop = commander.command(state, self.sim.control_dt)
             tcp_position, tcp_orientation = self.sim.tcp_pose()
             wrench = self.sim.wrench()
-            tau = self.sim.advance(state, sample, stop)
-            cause = self._safety_check(sample)
+            if getattr(commander, 'free', False):  # freedrive: the robot compensates gravity, the arm is free
+                tau = self.sim.advance_free(state)
+            else:
+                tau = self.sim.advance(state, sample, stop)
+            # Contacts are read only when something looks at them (they cost a force computation each).
+            watching = self._tool_contact.watching
+            contacts = self.sim.physics.contacts() if watching or self.robot.safety_mode != PROTECTIVE_STOP else ()
+            if watching:
+                halted = self._tool_contact.detect(contacts, self.sim.time)
+                if halted is not None:  # the robot cancels the motion: the next cycle brakes
+                    commander.halt(self.sim.state().q, halted)
+            cause = self._safety_check(sample, contacts)
             if cause is not None:
                 # Seen in this cycle's physics step: the arm is halted from the next cycle on.
                 self.robot.protective_stop(self.sim.time, cause)
@@ -255,12 +275,12 @@ class UrSimNode(Node):
             self.get_logger().error(f'PROTECTIVE_STOP: {cause}')
         self._cycle += 1
 
-    def _safety_check(self, sample) -> str | None:
+    def _safety_check(self, sample, contacts) -> str | None:
         """Under the lock, after the physics step: the cause of a protective stop, or None."""
         if self.robot.safety_mode == PROTECTIVE_STOP:
             return None
         p = self.sim.params
-        cause = contact_cause(self.sim.physics.contacts(), self.cfg.protective_stop_force)
+        cause = contact_cause(contacts, self.cfg.protective_stop_force)
         if cause is None:
             cause = limit_cause(self.sim.physics.positions(), sample.positions, p.q_min, p.q_max, self.joints)
         return cause

@@ -162,6 +162,18 @@ class ArmPhysics:
         """
         return -self.data.sensordata[self._ft]
 
+    def body_id(self, name: str) -> int | None:
+        """The MuJoCo id of body `name`, or None when the model has no such body."""
+        idx = mujoco.mj_name2id(self.model, mujoco.mjtObj.mjOBJ_BODY, name)
+        return idx if idx >= 0 else None
+
+    def set_external_wrench(self, body: int, force: np.ndarray, torque: np.ndarray) -> None:
+        """Push body `body` (an id) with `force` (3,) [N] and `torque` (3,) [N m], given in the base frame and
+        acting at the body's centre of mass, from the next step on until changed (zeros remove it)."""
+        r_base = self.data.xmat[self._base].reshape(3, 3)
+        self.data.xfrc_applied[body, :3] = r_base @ np.asarray(force, dtype=float)
+        self.data.xfrc_applied[body, 3:] = r_base @ np.asarray(torque, dtype=float)
+
     def set_payload(self, mass: float, cog: np.ndarray, moments: np.ndarray, quat: np.ndarray) -> None:
         """Give the payload body `mass` [kg] with its centre at `cog` (3,) [m] in tool0 and principal
         moments `moments` (3,) [kg m^2] along axes oriented by `quat` (w, x, y, z) in tool0."""

@@ -29,6 +29,12 @@ ACCEL_SLACK = 1.05
 # To stop (at a final point, a hold position or a position limit) the arm brakes harder, up to this multiple
 # of that limit where its torques allow (more makes several joints braking at once saturate their torques).
 BRAKE_CAPABILITY = 2.0
+# Freedrive: the joints' viscous damping is their own inertia over this time constant [s] (light: a push keeps
+# the arm moving for about this long). The limits hold with the joint's full effort: it is reached this far above
+# the velocity limit [rad/s] and this far past a position limit [rad].
+FREEDRIVE_TAU = 0.2
+FREEDRIVE_VELOCITY_BAND = 0.05
+FREEDRIVE_POSITION_BAND = 0.01
 
 
 class Simulator:
@@ -101,6 +107,27 @@ class Simulator:
         tau, _ = computed_torque(mass, bias, state.q, state.qd, sp.positions, sp.velocities, sp.accelerations,
                                  self.gains, p.effort_max, p.v_max, self.control_dt)
         self.physics.step(tau)
+        return tau
+
+    def advance_free(self, state: ArmState) -> np.ndarray:
+        """Freedrive for one control period: torques that cancel gravity and Coriolis (the model's bias) with light
+        viscous damping, so that the arm moves under external forces; the limits still hold (velocity above its
+        limit and positions beyond a limit are pushed back), within the effort limits. Returns the torques (n,)
+        [N m]. The servo restarts from the measured state, so that position control resumes without a jump."""
+        p = self.params
+        mass, bias = self.physics.dynamics()
+        inertia = np.diag(mass)
+        q, qd = state.q, state.qd
+        tau = bias - inertia / FREEDRIVE_TAU * qd
+        excess = qd - np.clip(qd, -p.v_max, p.v_max)
+        tau -= p.effort_max * np.clip(excess / FREEDRIVE_VELOCITY_BAND, -1.0, 1.0)
+        beyond = np.minimum(q - p.q_min, 0.0) + np.maximum(q - p.q_max, 0.0)
+        tau -= p.effort_max * np.clip(beyond / FREEDRIVE_POSITION_BAND, -1.0, 1.0)
+        tau = np.clip(tau, -p.effort_max, p.effort_max)
+        self.physics.step(tau)
+        after = self.physics.state()
+        self.servo.reset(after.q, after.qd)
+        self.last_setpoint = None
         return tau
 
     def tcp_pose(self) -> tuple[np.ndarray, np.ndarray]:

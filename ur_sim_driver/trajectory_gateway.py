@@ -32,7 +32,7 @@ from rclpy.signals import SignalHandlerOptions
 from trajectory_msgs.msg import JointTrajectory
 
 from ur_sim_driver import conversions as conv
-from ur_sim_driver import result_codes
+from ur_sim_driver import passthrough, result_codes
 from ur_sim_driver.cdr import parse_joint_trajectory
 from ur_sim_driver.command_arrays import CommandArrays, from_points
 from ur_sim_driver.errors import TrajectoryError
@@ -97,6 +97,7 @@ class TrajectoryGateway:
         self._handles: dict[bytes, object] = {}
         self._pending: dict[int, CommandArrays] = {}  # converted goals between goal callback and acceptance
         self.active = name in cfg.active
+        self.passthrough = name in cfg.passthrough
         ns = cfg.namespace.strip('/')
         base = f'/{ns}/{name}' if ns else f'/{name}'
         ordered = MutuallyExclusiveCallbackGroup()
@@ -104,8 +105,9 @@ class TrajectoryGateway:
             node, FollowJointTrajectory, f'{base}/follow_joint_trajectory', execute_callback=self._execute,
             goal_callback=self._on_goal, handle_accepted_callback=self._on_accepted,
             cancel_callback=lambda _: CancelResponse.ACCEPT, callback_group=ordered)
-        node.create_subscription(JointTrajectory, f'{base}/joint_trajectory', self._on_topic, 10,
-                                 callback_group=ordered, raw=True)
+        if not self.passthrough:  # upstream's passthrough controller has no topic interface
+            node.create_subscription(JointTrajectory, f'{base}/joint_trajectory', self._on_topic, 10,
+                                     callback_group=ordered, raw=True)
 
     def _wait_active(self, timeout: float) -> bool:
         """Whether the controller is active, allowing an activation already on its way through the pipe (the
@@ -124,10 +126,12 @@ class TrajectoryGateway:
         cfg = self.cfg
         (now,) = struct.unpack_from('d', self._sim_time, 0)
         strict = cfg.strict_limits
+        # The passthrough controller needs every joint and does not look at the end velocity.
         reason = validate_trajectory(
             cmd, joint_names_config=cfg.joints, now=now, q_min=cfg.q_min if strict else None,
             q_max=cfg.q_max if strict else None, v_max=cfg.v_max if strict else None,
-            allow_partial=cfg.allow_partial, allow_nonzero_end_velocity=cfg.allow_nonzero_end_velocity)
+            allow_partial=cfg.allow_partial and not self.passthrough,
+            allow_nonzero_end_velocity=cfg.allow_nonzero_end_velocity or self.passthrough)
         if reason is None and cmd.header_stamp - now > FAR_FUTURE:
             self.node.get_logger().warning(
                 f'{what} starts at header.stamp {cmd.header_stamp:.3f} s, {cmd.header_stamp - now:.1f} s after '
@@ -145,9 +149,13 @@ class TrajectoryGateway:
         if refusal is not None:  # deactivated by the controller_stopper: name the robot's state
             reason = f'the controller is not running: {refusal}'
         elif not self._wait_active(ACTIVATION_GRACE):
-            reason = INACTIVE_GOAL
+            reason = passthrough.INACTIVE if self.passthrough else INACTIVE_GOAL
+        elif self.passthrough and self._busy():
+            reason = passthrough.BUSY
         else:
             reason = self._validate(cmd, 'FollowJointTrajectory goal')
+        if reason is None and self.passthrough:
+            reason = passthrough.check_goal(cmd, self.cfg.joints, [t.name for t in goal.goal_tolerance])
         if reason is None and goal.multi_dof_trajectory.points:
             reason = 'multi_dof_trajectory is not supported by this controller (it has no multi-DOF joints)'
         if reason is not None:
@@ -156,14 +164,26 @@ class TrajectoryGateway:
         self._pending[id(goal)] = cmd
         return GoalResponse.ACCEPT
 
+    def _busy(self) -> bool:
+        with self._lock:
+            return bool(self._waiters) or bool(self._pending)
+
     def _on_accepted(self, goal_handle) -> None:
         goal = goal_handle.request
         cmd = self._pending.pop(id(goal))
+        if self.passthrough:
+            tolerances = passthrough.tolerances_of(conv.tolerance_specs(goal.goal_tolerance), self.cfg.joints,
+                                                   conv.duration_to_sec(goal.goal_time_tolerance))
+            self._start(goal_handle, cmd, tolerances)
+            return
         tolerances, reason = resolve_tolerances(
             self.cfg.defaults, self.cfg.joints, conv.tolerance_specs(goal.path_tolerance),
             conv.tolerance_specs(goal.goal_tolerance), conv.duration_to_sec(goal.goal_time_tolerance))
         if reason is not None:
             self.node.get_logger().error(f'Goal tolerances ignored, using the defaults: {reason}')
+        self._start(goal_handle, cmd, tolerances)
+
+    def _start(self, goal_handle, cmd, tolerances) -> None:
         token = bytes(goal_handle.goal_id.uuid)
         with self._lock:
             self._waiters[token] = _Waiter()
@@ -212,7 +232,7 @@ class TrajectoryGateway:
                                                 error_string='Goal canceled by the client.')
         ended = waiter.ended
         result = FollowJointTrajectory.Result(error_code=ended.code, error_string=ended.message)
-        if ended.code == result_codes.SUCCESSFUL:
+        if ended.code == result_codes.SUCCESSFUL and not ended.aborted:
             goal_handle.succeed()
         else:
             self.node.get_logger().warning(f'Goal aborted ({result_codes.NAMES[ended.code]}): {ended.message}')

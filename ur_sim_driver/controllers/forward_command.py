@@ -95,6 +95,13 @@ class ForwardCommandController(JointCommandController):
     def on_deactivate(self) -> None:
         self._target = None
 
+    def halt(self, q: np.ndarray, reason: str) -> None:
+        # The robot dropped the motion; the next message commands it again (as a servoj/speedj after the robot
+        # left its tool-contact mode).
+        self._target = None
+        self._r = np.array(q, dtype=float)
+        self._rd = np.zeros_like(self._r)
+
     def command(self, state: ArmState, period: float) -> tuple[TrajectorySample, np.ndarray | None]:
         zero = np.zeros_like(state.q)
         host = self.host

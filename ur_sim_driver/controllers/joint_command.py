@@ -32,6 +32,10 @@ class JointCommander:
         """
         raise NotImplementedError
 
+    def halt(self, q: np.ndarray, reason: str) -> None:
+        """The robot cancelled the motion (a tool contact): stop commanding motion, hold `q` (n,) [rad] and end
+        any goal, naming `reason`. Called under the lock between two cycles."""
+
 
 class JointCommandController(Component, JointCommander):
     """A controller that claims joint command interfaces (trajectory and forward controllers).

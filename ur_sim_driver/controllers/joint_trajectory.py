@@ -116,6 +116,15 @@ class JointTrajectoryControllerComponent(JointCommandController):
         self._token = self.core.active_token
         return sample, self.core.stop
 
+    def halt(self, q: np.ndarray, reason: str) -> None:
+        token = self.core.active_token
+        self.core.hold(q)
+        self._token = None
+        if token is not None:
+            # Upstream's JTC is not told: the robot stops following, and the goal ends on its tolerances. ur_sim
+            # ends it at once with the code a path tolerance would give, naming the cause.
+            self._finish(Outcome(token, result_codes.PATH_TOLERANCE_VIOLATED, reason))
+
     # ---- every cycle while active (simulation loop, outside the lock) ---------------------------------------------
     def update(self, cycle: Cycle) -> None:
         state, sample = cycle.state, cycle.reference

@@ -1,0 +1,174 @@
+"""tool_contact_controller: ``~/detect_tool_contact`` (ur_msgs/action/ToolContact).
+
+Upstream (ur_controllers' ToolContactController with the UR client library's startToolContact): while a goal is
+active the robot watches its tool; when the tool touches something, the robot cancels every motion, and the
+goal succeeds (the controller then ends tool-contact mode, so the robot takes commands again). The action carries
+no data: the outcome is the goal's status. Facts kept from upstream: goals are rejected while the controller is
+inactive and while a goal is active; cancel ends the goal canceled; deactivation aborts it; the controller
+claims only ``<tf_prefix>tool_contact/tool_contact_set_state``, so it runs beside a trajectory or forward
+controller (``ur_hardware.py``); CB3 robots refuse it.
+
+How ur_sim detects the contact: after every physics step, a MuJoCo contact of a body of the tool or the flange
+(the subtree of ``wrist_3_link``) with a force above :data:`TOOL_CONTACT_FORCE` (or half the protective stop
+force when that is lower), so that the tool contact stops the robot before the protective stop would. The stop
+is commanded in the next control cycle: the active joint controller holds the measured position and its goal
+ends (``JointCommander.halt``), and the servo brakes at the robot's limits.
+"""
+from __future__ import annotations
+
+import threading
+
+from rclpy.action import ActionServer, CancelResponse, GoalResponse
+from rclpy.callback_groups import ReentrantCallbackGroup
+from rclpy.node import Node
+from ur_msgs.action import ToolContact
+
+from ur_sim_driver.controllers.base import Component, Host
+from ur_sim_driver.safety import Contact
+from ur_sim_driver.sim_config import SimConfig
+from ur_sim_driver.ur_hardware import TOOL_CONTACT
+
+TYPE = 'ur_controllers/ToolContactController'
+TOOL_CONTACT_FORCE = 2.0  # [N] contact force at the tool or flange that counts as a tool contact
+FLANGE_LINK = 'wrist_3_link'
+# Upstream's log lines.
+INACTIVE = 'Tool contact controller is not in active state, can not accept action goals.'
+BUSY = 'Tool contact already active, rejecting goal.'
+DEACTIVATED = 'Aborting tool contact, as controller has been deactivated.'
+CB3 = 'This feature is not supported on CB3 robots, controller will not be started.'
+SUCCEEDED, ABORTED, CANCELED = 'succeeded', 'aborted', 'canceled'
+
+
+class _Goal:
+    """One accepted goal: its outcome is decided by the simulation loop, the execute callback reports it."""
+
+    def __init__(self, handle) -> None:
+        self.handle = handle
+        self.outcome: str | None = None
+        self.done = threading.Event()
+
+
+class ToolContactController(Component):
+    """The driver's tool_contact_controller."""
+
+    name = 'tool_contact_controller'
+    type_name = TYPE
+    initially_active = False
+
+    def __init__(self) -> None:
+        super().__init__()
+        self._goal: _Goal | None = None  # the active goal (under the lock)
+        self._tool_bodies: frozenset[str] = frozenset()
+        self._threshold = TOOL_CONTACT_FORCE
+        self.unavailable: str | None = None
+        self.last_contact: tuple[float, Contact] | None = None  # (time [s], contact) of the last detection
+
+    def interfaces(self, cfg: SimConfig) -> tuple[tuple[str, ...], tuple[str, ...]]:
+        p = f'{cfg.tf_prefix}{TOOL_CONTACT}'
+        return (f'{p}/tool_contact_set_state',), (f'{p}/tool_contact_result',
+                                                  f'{cfg.tf_prefix}get_robot_software_version/get_version_major',
+                                                  f'{p}/tool_contact_state')
+
+    def on_configure(self, host: Host, node: Node) -> None:
+        if host.sim.params.series == 'cb3':
+            self.unavailable = CB3
+        self._tool_bodies = tool_bodies(host.sim.physics.model, f'{host.cfg.tf_prefix}{FLANGE_LINK}')
+        self._threshold = min(TOOL_CONTACT_FORCE, 0.5 * host.cfg.protective_stop_force)
+        self._server = ActionServer(
+            node, ToolContact, host.cfg.prefixed(f'{self.name}/detect_tool_contact'), execute_callback=self._execute,
+            goal_callback=self._on_goal, cancel_callback=self._on_cancel, callback_group=ReentrantCallbackGroup())
+
+    # ---- simulation loop, under the lock ---------------------------------------------------------------------
+    @property
+    def watching(self) -> bool:
+        """A goal is active: contacts of the tool end it."""
+        goal = self._goal
+        return self.active and goal is not None and goal.outcome is None
+
+    def detect(self, contacts: tuple[Contact, ...], t: float) -> str | None:
+        """After a physics step at time `t` [s]: why the robot cancels its motion now (a tool contact), or None."""
+        if not self.watching:
+            return None
+        touching = [c for c in contacts if c.robot_part in self._tool_bodies and c.force > self._threshold]
+        if not touching:
+            return None
+        c = max(touching, key=lambda c: c.force)
+        self.last_contact = (t, c)
+        self._end(SUCCEEDED)
+        return (f'tool contact: {c.robot_part} touched {c.other} ({c.force:.1f} N > {self._threshold:.1f} N); '
+                'the robot cancelled the motion')
+
+    def on_deactivate(self) -> None:
+        if self._goal is not None and self._goal.outcome is None:
+            self.node.get_logger().info(DEACTIVATED)
+            self._end(ABORTED)
+
+    def _end(self, outcome: str) -> None:
+        goal = self._goal
+        if goal is not None and goal.outcome is None:
+            goal.outcome = outcome
+            self._goal = None
+            goal.done.set()
+
+    # ---- action server (executor threads) -----------------------------------------------------------------------
+    def _on_goal(self, goal_request) -> GoalResponse:
+        self.node.get_logger().info('New goal received.')
+        with self.host.lock:
+            if not self.active:
+                reason = INACTIVE
+            elif self._goal is not None:
+                reason = BUSY
+            else:
+                reason = None
+                self._goal = _Goal(None)  # reserved until accepted: a second goal meanwhile is refused
+        if reason is not None:
+            self.node.get_logger().error(reason)
+            return GoalResponse.REJECT
+        return GoalResponse.ACCEPT
+
+    def _on_cancel(self, goal_handle) -> CancelResponse:
+        with self.host.lock:
+            goal = self._goal
+            if goal is not None and goal.handle is goal_handle and goal.outcome is None:
+                self.node.get_logger().info('Cancel tool contact requested.')
+                self._end(CANCELED)
+        return CancelResponse.ACCEPT
+
+    def _execute(self, goal_handle) -> ToolContact.Result:
+        with self.host.lock:
+            goal = self._goal
+            if goal is not None and goal.handle is None:
+                goal.handle = goal_handle
+            else:  # deactivated between acceptance and execution
+                goal = _Goal(goal_handle)
+                goal.outcome = ABORTED
+        self.node.get_logger().info('Goal accepted.')
+        while not goal.done.wait(0.05):
+            if not self.host.context.ok():
+                goal.outcome = ABORTED
+                break
+        if goal.outcome == SUCCEEDED:
+            self.node.get_logger().info('Tool contact finished successfully.')
+            goal_handle.succeed()
+        elif goal.outcome == CANCELED:
+            goal_handle.canceled()
+        else:
+            goal_handle.abort()
+        return ToolContact.Result()
+
+
+def tool_bodies(model, flange: str) -> frozenset[str]:
+    """Names of the bodies in the subtree of body `flange` (flange, tool, payload) of a MuJoCo model."""
+    import mujoco
+
+    root = mujoco.mj_name2id(model, mujoco.mjtObj.mjOBJ_BODY, flange)
+    if root < 0:
+        return frozenset()
+    names = set()
+    for b in range(model.nbody):
+        a = b
+        while a > 0 and a != root:
+            a = int(model.body_parentid[a])
+        if a == root:
+            names.add(mujoco.mj_id2name(model, mujoco.mjtObj.mjOBJ_BODY, b))
+    return frozenset(names)
