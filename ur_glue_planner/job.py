@@ -21,6 +21,9 @@ from ur_sim_driver.description.params import UR_TYPES
 from ur_sim_driver.description.tool import TOOL_CHOICES as TOOLS
 
 PATH_SOURCES = ("waypoints", "auto")
+METHODS = ("constant_speed", "seed1")
+#: UR digital outputs as ur_msgs/SetIO numbers them: 0-7 standard, 8-15 configurable, 16-17 tool.
+DIGITAL_OUTPUT_PINS = range(0, 18)
 
 
 @dataclass(frozen=True)
@@ -80,6 +83,36 @@ class Tolerances:
 
 
 @dataclass(frozen=True)
+class DispenserSpec:
+    """The glue gun on a digital output; the defaults are ur_sim's (``dispenser.*`` parameters).
+
+    Attributes:
+        pin: SetIO digital output pin (0-7 standard, 8-15 configurable, 16-17 tool).
+        flow_rate: Material flow once fully open [ml/s].
+        nozzle_diameter: [mm].
+        on_delay: From the output switching on until material leaves the nozzle [s].
+        off_delay: From the output switching off until the flow starts to fall [s].
+        time_constant: First-order rise (and fall) of the flow after the delays [s].
+        flying_start: Closed loops: the tip runs up along the loop's tail and runs out past the
+            closure at cruise speed, so that material starts and stops while the tip moves at
+            the commanded speed (else the bead starts and ends with the tip at rest).
+    """
+
+    pin: int
+    flow_rate: float
+    nozzle_diameter: float
+    on_delay: float
+    off_delay: float
+    time_constant: float
+    flying_start: bool
+
+    @property
+    def kind(self) -> str:
+        """'standard', 'configurable' or 'tool' output."""
+        return "standard" if self.pin < 8 else "configurable" if self.pin < 16 else "tool"
+
+
+@dataclass(frozen=True)
 class GlueJob:
     """A validated glue job; see ``config/glue_job.yaml`` for the meaning and unit of each field.
 
@@ -105,6 +138,8 @@ class GlueJob:
     tolerances: Tolerances
     controller_name: str
     namespace: str
+    dispenser: DispenserSpec
+    method: str = "constant_speed"
     source_file: str = ""
 
 
@@ -113,7 +148,11 @@ _DEFAULTS: dict[str, Any] = {
     "sample_time": DEFAULT_SAMPLE_TIME, "ramp_time": 0.3, "approach_distance": 0.05, "retreat_distance": 0.05,
     "approach_speed": 0.05, "approach_min_duration": 4.0, "approach_velocity_scale": 0.5,
     "home_deg": [0.0, -90.0, 0.0, -90.0, 0.0, 0.0], "ik_seed_deg": None,
-    "controller_name": "scaled_joint_trajectory_controller", "namespace": "",
+    "controller_name": "scaled_joint_trajectory_controller", "namespace": "", "method": "constant_speed",
+}
+_DISPENSER_DEFAULTS: dict[str, Any] = {
+    "pin": 16, "flow_rate": 6.0, "nozzle_diameter": 6.0, "on_delay": 0.05, "off_delay": 0.03,
+    "time_constant": 0.05, "flying_start": True,
 }
 _WINDSHIELD_DEFAULTS = {"mesh": "meshes/windshield.stl", "pose": {"xyz": [0.0, 0.4, 0.15],
                                                                   "rpy": [math.radians(-55.0), 0.0, 0.0]}}
@@ -172,6 +211,13 @@ def _per_joint(value: Any, field: str) -> tuple[float, ...]:
     return tuple(float(x) for x in arr)
 
 
+def _pin(value: Any, field: str) -> int:
+    if isinstance(value, bool) or not isinstance(value, int) or value not in DIGITAL_OUTPUT_PINS:
+        raise JobError(f"{field}: {value!r} is not a digital output pin in [0, 17] "
+                       "(0-7 standard, 8-15 configurable, 16-17 tool)")
+    return value
+
+
 def _bool(value: Any, field: str) -> bool:
     if not isinstance(value, bool):
         raise JobError(f"{field}: {value!r} is not true or false")
@@ -190,7 +236,8 @@ def parse_job(raw: Any, source_file: str = "") -> GlueJob:
     Raises:
         JobError: An unknown key or an invalid value (the message names field, value and range).
     """
-    top = _section(raw, "", {**_DEFAULTS, "windshield": None, "path": None, "tolerances": None})
+    top = _section(raw, "", {**_DEFAULTS, "windshield": None, "path": None, "tolerances": None, "dispenser": None})
+    disp = _section(top["dispenser"], "dispenser", _DISPENSER_DEFAULTS)
     ws = _section(top["windshield"], "windshield", _WINDSHIELD_DEFAULTS)
     pose = _section(ws["pose"], "windshield.pose", _WINDSHIELD_DEFAULTS["pose"])
     pth = _section(top["path"], "path", _PATH_DEFAULTS)
@@ -256,6 +303,15 @@ def parse_job(raw: Any, source_file: str = "") -> GlueJob:
             goal_time=_number(tol["goal_time_tolerance"], "tolerances.goal_time_tolerance", 0.0, 60.0)),
         controller_name=_text(top["controller_name"], "controller_name"),
         namespace=namespace,
+        dispenser=DispenserSpec(
+            pin=_pin(disp["pin"], "dispenser.pin"),
+            flow_rate=_number(disp["flow_rate"], "dispenser.flow_rate", 0.0, 100.0, lo_open=True),
+            nozzle_diameter=_number(disp["nozzle_diameter"], "dispenser.nozzle_diameter", 0.0, 30.0, lo_open=True),
+            on_delay=_number(disp["on_delay"], "dispenser.on_delay", 0.0, 2.0),
+            off_delay=_number(disp["off_delay"], "dispenser.off_delay", 0.0, 2.0),
+            time_constant=_number(disp["time_constant"], "dispenser.time_constant", 0.0, 1.0),
+            flying_start=_bool(disp["flying_start"], "dispenser.flying_start")),
+        method=_choice(top["method"], "method", METHODS),
         source_file=source_file,
     )
 

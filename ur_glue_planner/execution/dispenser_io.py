@@ -1,0 +1,103 @@
+"""The glue gun on the robot's digital output: switched through the UR driver's ``io_and_status_controller``.
+
+``/io_and_status_controller/set_io`` (ur_msgs/SetIO, FUN_SET_DIGITAL_OUT) is the same call on ur_sim and on a
+real UR driver, so against a real robot this switches the real gun. Switch times follow the controller's
+scaled clock (see switch_timer.py) from its ``controller_state`` messages; every call is logged with the
+robot time it was made at. :meth:`off` switches the gun off and waits for the answer: the executor calls it
+at the end, on failure and on cancel.
+"""
+from __future__ import annotations
+
+import threading
+import time
+from dataclasses import dataclass
+
+from control_msgs.msg import JointTrajectoryControllerState
+from rclpy.node import Node
+from rclpy.qos import QoSProfile
+from ur_msgs.srv import SetIO
+
+from ur_glue_planner.errors import ClientError
+from ur_glue_planner.execution.switch_timer import ScaledClock, SwitchEvent, SwitchSequence
+
+SET_IO = '/io_and_status_controller/set_io'
+
+
+@dataclass(frozen=True)
+class SwitchRecord:
+    """A set_io call made: the event, the robot time [s] and the trajectory time [s] it was made at."""
+
+    event: SwitchEvent
+    robot_time: float
+    trajectory_time: float
+    success: bool | None
+
+
+class DispenserIO:
+    """Switches one digital output on a trajectory's clock.
+
+    Args:
+        node: The client's node (its executor spins elsewhere).
+        controller_state: Topic of the trajectory controller's state (stamp and speed_scaling_factor).
+        half_period: Half the controller's period [s] (2 ms at 500 Hz would be 0.001).
+    """
+
+    def __init__(self, node: Node, controller_state: str, half_period: float = 0.001) -> None:
+        self.node = node
+        self.client = node.create_client(SetIO, SET_IO)
+        self._lock = threading.Lock()
+        self._clock: ScaledClock | None = None
+        self._sequence: SwitchSequence | None = None
+        self._half = half_period
+        self.records: list[SwitchRecord] = []
+        self._pending: list[tuple[SwitchEvent, float, float, object]] = []
+        node.create_subscription(JointTrajectoryControllerState, controller_state, self._on_state,
+                                 QoSProfile(depth=20))
+
+    def available(self, timeout: float = 2.0) -> bool:
+        """Whether the set_io service answers (the io_and_status_controller is running)."""
+        return self.client.wait_for_service(timeout_sec=timeout)
+
+    def arm(self, events: list[SwitchEvent], start: float) -> None:
+        """Switch ``events`` on the clock of a goal that starts at robot time ``start`` [s]."""
+        with self._lock:
+            self._clock = ScaledClock(start)
+            self._sequence = SwitchSequence(events, self._half)
+
+    def disarm(self) -> list[SwitchEvent]:
+        """Stop switching; return the events that did not happen."""
+        with self._lock:
+            left = self._sequence.pending if self._sequence is not None else []
+            self._clock = self._sequence = None
+            return left
+
+    def _on_state(self, msg: JointTrajectoryControllerState) -> None:
+        stamp = msg.header.stamp.sec + msg.header.stamp.nanosec * 1e-9
+        with self._lock:
+            if self._clock is None:
+                return
+            t = self._clock.update(stamp, msg.speed_scaling_factor)
+            due = self._sequence.due(t)
+        for event in due:
+            future = self.client.call_async(SetIO.Request(fun=SetIO.Request.FUN_SET_DIGITAL_OUT, pin=event.pin,
+                                                          state=1.0 if event.state else 0.0))
+            self._pending.append((event, stamp, t, future))
+
+    def collect(self) -> list[SwitchRecord]:
+        """Records of every call so far (answers that arrived are filled in)."""
+        for event, stamp, t, future in self._pending:
+            ok = future.result().success if future.done() and future.result() is not None else None
+            self.records.append(SwitchRecord(event, stamp, t, ok))
+        self._pending = []
+        return list(self.records)
+
+    def off(self, pin: int, timeout: float = 5.0) -> bool:
+        """Switch ``pin`` off now and wait for the answer (any armed events are dropped first)."""
+        self.disarm()
+        future = self.client.call_async(SetIO.Request(fun=SetIO.Request.FUN_SET_DIGITAL_OUT, pin=pin, state=0.0))
+        deadline = time.monotonic() + timeout
+        while not future.done():
+            if time.monotonic() > deadline:
+                raise ClientError(f'{SET_IO}: no answer to switching pin {pin} off within {timeout:.1f} s')
+            time.sleep(0.005)
+        return bool(future.result().success)

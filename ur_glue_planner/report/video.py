@@ -1,0 +1,102 @@
+"""A video of the run: MuJoCo off-screen frames of the recorded joint states, the bead growing on the glass.
+
+Frames at ``fps`` of robot time (the run as it happened, whatever the simulation's real-time factor), H.264
+MP4 through imageio-ffmpeg (its wheel carries an ffmpeg binary), yuv420p so that browsers play it. The model is
+the shared description's (URDF/MJCF generator), not the simulator's: a run on a real robot gets its video too.
+"""
+from __future__ import annotations
+
+import sys
+import time
+from collections.abc import Callable, Sequence
+from pathlib import Path
+
+import imageio_ffmpeg
+import mujoco
+import numpy as np
+
+from ur_glue_planner.report.render import scene_xml
+from ur_sim_driver.description.params import joint_names
+
+_MAX_BEAD_SEGMENTS = 1500  # geoms per frame for the bead (the renderer's budget is max_geom)
+BEAD_RGBA = (0.95, 0.55, 0.1, 1.0)
+
+
+def _progress(done: int, total: int, started: float) -> None:
+    rate = done / max(time.perf_counter() - started, 1e-6)
+    sys.stdout.write(f'\r  video: frame {done}/{total} ({100.0 * done / total:5.1f} %, {rate:4.1f} frames/s)')
+    if done == total:
+        sys.stdout.write('\n')
+    sys.stdout.flush()
+
+
+def add_bead(scene: mujoco.MjvScene, points: np.ndarray, widths: np.ndarray, heights: np.ndarray,
+             rgba: Sequence[float] = BEAD_RGBA) -> None:
+    """Draw a bead (deposit points (N, 3) [m], widths, heights (N,) [m]) as capsules as thick as half its
+    width, resting on the glass."""
+    if len(points) < 2:
+        return
+    step = max(1, int(np.ceil((len(points) - 1) / _MAX_BEAD_SEGMENTS)))
+    idx = np.unique(np.append(np.arange(0, len(points), step), len(points) - 1))
+    color = np.asarray(rgba, dtype=np.float32)
+    for a, b in zip(idx[:-1], idx[1:]):
+        if scene.ngeom >= scene.maxgeom or np.linalg.norm(points[b] - points[a]) > 0.02:
+            continue
+        radius = 0.25 * float(widths[a] + widths[b]) * 0.5
+        if radius <= 0.0:
+            continue
+        geom = scene.geoms[scene.ngeom]
+        mujoco.mjv_initGeom(geom, mujoco.mjtGeom.mjGEOM_CAPSULE, np.zeros(3), np.zeros(3), np.zeros(9), color)
+        mujoco.mjv_connector(geom, mujoco.mjtGeom.mjGEOM_CAPSULE, radius, points[a], points[b])
+        scene.ngeom += 1
+
+
+def render_video(ur_type: str, tool: str | None, meshes, t: np.ndarray, q: np.ndarray, out_mp4: Path,
+                 bead=None, bead_t0: float = 0.0, fps: int = 30, width: int = 640, height: int = 480,
+                 lookat: Sequence[float] = (0.0, 0.55, 0.25), distance: float = 1.6, azimuth: float = 120.0,
+                 elevation: float = -40.0, progress: Callable[[int, int, float], None] | None = _progress) -> dict:
+    """Write the run as an MP4.
+
+    Args:
+        ur_type, tool, meshes: The scene (see render.scene_xml).
+        t: (K,) [s] recorded joint state times, increasing; q: (K, 6) [rad].
+        out_mp4: File to write.
+        bead: The deposit (BeadPoints, robot time) or None; bead_t0: robot time [s] of t = 0.
+        fps, width, height: Video frame rate and size.
+        progress: Called as progress(frames done, total, start time) (None: silent).
+
+    Returns:
+        frames, duration [s], seconds of wall time it took, fps, size.
+    """
+    started = time.perf_counter()
+    model = mujoco.MjModel.from_xml_string(scene_xml(ur_type, tool, meshes, width, height))
+    data = mujoco.MjData(model)
+    adr = [model.jnt_qposadr[mujoco.mj_name2id(model, mujoco.mjtObj.mjOBJ_JOINT, n)] for n in joint_names()]
+    camera = mujoco.MjvCamera()
+    camera.lookat[:] = lookat
+    camera.distance, camera.azimuth, camera.elevation = distance, azimuth, elevation
+    frames_t = np.arange(t[0], t[-1] + 1e-9, 1.0 / fps)
+    total = len(frames_t)
+    out_mp4 = Path(out_mp4)
+    out_mp4.parent.mkdir(parents=True, exist_ok=True)
+    writer = imageio_ffmpeg.write_frames(str(out_mp4), (width, height), fps=fps, codec='libx264',
+                                         pix_fmt_out='yuv420p', quality=7, macro_block_size=16,
+                                         output_params=['-movflags', '+faststart'])
+    writer.send(None)
+    try:
+        with mujoco.Renderer(model, height, width, max_geom=_MAX_BEAD_SEGMENTS + 500) as renderer:
+            for i, tf in enumerate(frames_t):
+                for j, a in enumerate(adr):
+                    data.qpos[a] = np.interp(tf, t, q[:, j])
+                mujoco.mj_kinematics(model, data)
+                renderer.update_scene(data, camera)
+                if bead is not None:
+                    now = bead.until(bead_t0 + tf)
+                    add_bead(renderer.scene, now.points, now.widths, now.heights)
+                writer.send(np.ascontiguousarray(renderer.render()))
+                if progress is not None and (i % 15 == 14 or i == total - 1):
+                    progress(i + 1, total, started)
+    finally:
+        writer.close()
+    return {'frames': total, 'duration_s': float(frames_t[-1] - frames_t[0]) if total else 0.0,
+            'render_seconds': time.perf_counter() - started, 'fps': fps, 'size': [width, height]}
