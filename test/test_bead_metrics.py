@@ -99,6 +99,7 @@ def test_half_and_half_closure_counts_as_one_bead():
     area = np.ones(len(s))
     area[s < 0.010] = s[s < 0.010] / 0.010
     area[s > LENGTH] = 1.0 - (s[s > LENGTH] - LENGTH) / 0.010
+    area = area.clip(0.0, 1.0)
     w, h = W * np.sqrt(area), H * np.sqrt(area)
     fig = quality(s, pts, w, h, t)
     assert fig['width_within_band_fraction'] > 0.995 and fig['blobs'] == [] and fig['gap_length_mm'] == 0.0

@@ -147,6 +147,6 @@ def test_dispenser_switches_while_the_tip_cruises(plan):
     # the tip is where the bead starts and ends at those times, both the same point of the closed loop
     start = np.array([np.interp(d.t_arrive, plan.bead.times, plan.bead.tip_pos[:, i]) for i in range(3)])
     end = np.array([np.interp(d.t_leave, plan.bead.times, plan.bead.tip_pos[:, i]) for i in range(3)])
-    np.testing.assert_allclose(start, plan.path.sample(0.0)[0][0], atol=5e-4)
+    np.testing.assert_allclose(start, np.ravel(plan.path.sample(0.0)[0]), atol=5e-4)
     np.testing.assert_allclose(end, start, atol=5e-4)
     np.testing.assert_allclose(plan.line[0], start, atol=5e-4)

@@ -12,13 +12,13 @@ Figures, each over the intended line sampled every ``step`` [m]:
 - width: mean, min, max and the share of the line's length within +-``band`` of the nominal width,
 - gaps: stations without material (total length, and each gap's start and length),
 - blobs: runs wider than nominal + band, each tagged 'start', 'stop', 'corner' or 'line' by where it lies,
-- closure (loops): where the bead reaches half its nominal width at the start and at the end, and the
+- closure (loops): where the bead reaches half its nominal section at the start and at the end, and the
   overlap between them [m] (> 0: the end runs past the start; < 0: it stops short),
 - lateral deviation of the bead centre from the line, and the standoff when given.
 """
 from __future__ import annotations
 
-from dataclasses import dataclass
+from dataclasses import dataclass, field
 
 import numpy as np
 
@@ -36,8 +36,8 @@ class StationProfile:
     station: np.ndarray
     width: np.ndarray
     passes: np.ndarray
-    point_station: np.ndarray = np.empty(0)
-    point_lateral: np.ndarray = np.empty(0)
+    point_station: np.ndarray = field(default_factory=lambda: np.empty(0))
+    point_lateral: np.ndarray = field(default_factory=lambda: np.empty(0))
 
 
 def project_onto_polyline(points: np.ndarray, line: np.ndarray, chunk: int = 512) -> tuple[np.ndarray, np.ndarray]:
@@ -96,7 +96,7 @@ def station_profile(station: np.ndarray, widths: np.ndarray, heights: np.ndarray
         shifts = (length * np.arange(np.floor(lo / length) - 1, np.ceil(hi / length) + 1) if closed else (0.0,))
         for shift in shifts:
             g = grid + shift
-            inside = (g >= lo) & (g <= hi)
+            inside = (g >= lo) & (g < hi)  # half-open: a loop closing exactly on its start counts once
             area[inside] += np.interp(g[inside], s_run, a_run)
             passes[inside] += 1
     width = np.sqrt(np.maximum(area, 0.0) / ratio)
@@ -195,9 +195,11 @@ def bead_quality(points: np.ndarray, widths: np.ndarray, heights: np.ndarray, ti
 
 
 def closure_overlap(station: np.ndarray, widths: np.ndarray, nominal_width: float, length: float) -> dict:
-    """Where a loop's bead starts and ends (its width first and last at half the nominal, in time order) and
-    the overlap [mm] of the end past the start (negative: it stops short of the start)."""
-    half = widths >= 0.5 * nominal_width
+    """Where a loop's bead starts and ends (its section first and last at half the nominal one, i.e. the width
+    at nominal / sqrt(2), in time order) and the overlap [mm] of the end past the start (negative: it stops
+    short of the start). A start that rises and an end that falls over the same stretch, adding up to the
+    full section there, have an overlap of 0."""
+    half = widths >= nominal_width / np.sqrt(2.0)
     if not np.any(half):
         return {'start_station_mm': None, 'end_station_mm': None, 'overlap_mm': None}
     i, j = np.flatnonzero(half)[[0, -1]]
