@@ -27,6 +27,7 @@ from rosgraph_msgs.msg import Clock
 from ur_sim_driver import conversions as conv
 from ur_sim_driver import result_codes
 from ur_sim_driver.controllers.base import Component, Cycle, Host
+from ur_sim_driver.controllers.dispenser import SimulatedDispenser
 from ur_sim_driver.controllers.force_torque_sensor_broadcaster import ForceTorqueSensorBroadcaster
 from ur_sim_driver.controllers.io_and_status import IoAndStatusController
 from ur_sim_driver.controllers.joint_state_broadcaster import JointStateBroadcaster
@@ -108,7 +109,7 @@ class UrSimNode(Node):
         self.components: list[Component] = [
             JointStateBroadcaster(), SpeedScalingStateBroadcaster(), TcpPoseBroadcaster(),
             IoAndStatusController(), UrConfigurationController(), DashboardClient(), SimulatedInputs(),
-            ForceTorqueSensorBroadcaster(), RobotStatePublisher()]
+            ForceTorqueSensorBroadcaster(), RobotStatePublisher(), SimulatedDispenser()]
         for component in self.components:
             component.configure(self.host)
             component.activate()

@@ -6,6 +6,7 @@ from collections.abc import Mapping
 from dataclasses import dataclass
 from typing import Any
 
+from ur_sim_driver.dispenser import DispenserParams, dispenser_params
 from ur_sim_driver.errors import ConfigError
 from ur_sim_driver.safety import DEFAULT_CONTACT_FORCE
 
@@ -53,6 +54,7 @@ class SimConfig:
     goal_time: float = 0.0
     constraints: tuple[JointConstraint, ...] = (JointConstraint(),) * 6
     publish_frequency: float = 20.0  # [Hz] of simulated time: robot_state_publisher's /tf
+    dispenser: DispenserParams = DispenserParams()  # the glue dispenser's model (tool: dispenser only)
 
     def prefixed(self, name: str) -> str:
         """`name` under the configured namespace, e.g. '/ur10/joint_states'."""
@@ -152,6 +154,7 @@ def sim_config_from_params(params: Mapping[str, Any]) -> SimConfig:
         constraints=tuple(constraints),
         publish_frequency=_number('publish_frequency', get('publish_frequency', d.publish_frequency), 0.0, 1000.0,
                                   lo_open=True),
+        dispenser=dispenser_params(params),
     )
 
 
