@@ -3,7 +3,8 @@
 Simulation only: a real UR driver has neither, and the planner then reports no bead (``available`` is False).
 The cloud holds the whole bead so far (transient local): per deposit point x, y, z, width, height (float32, m)
 and t (float64, simulated seconds), in the robot's ``base`` frame, which the planner's world (``base_link``,
-the robot at the origin) sees rotated by pi about z.
+the robot at the origin) sees rotated by pi about z. The message format is ``ur_sim_driver.bead``'s (a
+message helper, not the simulator).
 """
 from __future__ import annotations
 
@@ -13,15 +14,14 @@ from dataclasses import dataclass
 import numpy as np
 from rclpy.node import Node
 from rclpy.qos import DurabilityPolicy, QoSProfile
-from sensor_msgs.msg import PointCloud2, PointField
+from sensor_msgs.msg import PointCloud2
 from std_srvs.srv import Trigger
 
 from ur_glue_planner.errors import ClientError
+from ur_sim_driver.bead import BASE_IN_WORLD, from_cloud
 
 BEAD_TOPIC = '/ur_sim/glue_bead'
 CLEAR_SERVICE = '/ur_sim/clear_glue_bead'
-_NUMPY = {PointField.FLOAT32: '<f4', PointField.FLOAT64: '<f8', PointField.INT32: '<i4', PointField.UINT32: '<u4',
-          PointField.INT16: '<i2', PointField.UINT16: '<u2', PointField.INT8: 'i1', PointField.UINT8: 'u1'}
 
 
 @dataclass(frozen=True, eq=False)
@@ -41,20 +41,12 @@ class BeadPoints:
 
 
 def bead_from_cloud(msg: PointCloud2) -> BeadPoints:
-    """Read the bead cloud (fields by name, any order and padding); x and y turned from ``base`` to
-    ``base_link``."""
-    fields = {f.name: f for f in msg.fields}
-    missing = {'x', 'y', 'z', 'width', 'height', 't'} - set(fields)
-    if missing:
-        raise ClientError(f'{BEAD_TOPIC}: fields {sorted(missing)} missing from the cloud')
-    dtype = np.dtype({'names': list(fields), 'formats': [_NUMPY[f.datatype] for f in fields.values()],
-                      'offsets': [f.offset for f in fields.values()], 'itemsize': msg.point_step})
-    n = msg.width * msg.height
-    rec = np.frombuffer(bytes(msg.data), dtype=dtype, count=n)
-    pts = np.column_stack([-rec['x'].astype(float), -rec['y'].astype(float), rec['z'].astype(float)])
-    order = np.argsort(rec['t'], kind='stable')
-    return BeadPoints(pts[order], rec['width'].astype(float)[order], rec['height'].astype(float)[order],
-                      rec['t'].astype(float)[order])
+    """Read the bead cloud (ur_sim_driver.bead's format) in time order, turned from ``base`` to ``base_link``."""
+    bead = from_cloud(msg)
+    pts = np.asarray(bead.points, dtype=float) @ BASE_IN_WORLD[:3, :3].T
+    order = np.argsort(bead.times, kind='stable')
+    return BeadPoints(pts[order], np.asarray(bead.widths, float)[order], np.asarray(bead.heights, float)[order],
+                      np.asarray(bead.times, float)[order])
 
 
 class BeadListener:

@@ -16,9 +16,10 @@ import mujoco
 import numpy as np
 
 from ur_glue_planner.report.render import scene_xml
+from ur_sim_driver.bead import Bead, draw_bead
 from ur_sim_driver.description.params import joint_names
 
-_MAX_BEAD_SEGMENTS = 800  # geoms per frame for the bead (the renderer's budget is max_geom)
+_MAX_BEAD_SEGMENTS = 800  # geoms per frame for the bead (draw_bead thins the bead to the renderer's budget)
 BEAD_RGBA = (0.95, 0.55, 0.1, 1.0)
 
 
@@ -31,24 +32,12 @@ def _progress(done: int, total: int, started: float) -> None:
 
 
 def add_bead(scene: mujoco.MjvScene, points: np.ndarray, widths: np.ndarray, heights: np.ndarray,
-             rgba: Sequence[float] = BEAD_RGBA) -> None:
-    """Draw a bead (deposit points (N, 3) [m], widths, heights (N,) [m]) as capsules as thick as half its
-    width, resting on the glass."""
+             times: np.ndarray, rgba: Sequence[float] = BEAD_RGBA) -> int:
+    """Draw a bead (deposit points (N, 3) [m] in the world, widths, heights, times (N,)) with ur_sim's own
+    ``draw_bead`` (capsules on the glass); returns the geoms added."""
     if len(points) < 2:
-        return
-    step = max(1, int(np.ceil((len(points) - 1) / _MAX_BEAD_SEGMENTS)))
-    idx = np.unique(np.append(np.arange(0, len(points), step), len(points) - 1))
-    color = np.asarray(rgba, dtype=np.float32)
-    for a, b in zip(idx[:-1], idx[1:]):
-        if scene.ngeom >= scene.maxgeom or np.linalg.norm(points[b] - points[a]) > 0.02:
-            continue
-        radius = 0.25 * float(widths[a] + widths[b]) * 0.5
-        if radius <= 0.0:
-            continue
-        geom = scene.geoms[scene.ngeom]
-        mujoco.mjv_initGeom(geom, mujoco.mjtGeom.mjGEOM_CAPSULE, np.zeros(3), np.zeros(3), np.zeros(9), color)
-        mujoco.mjv_connector(geom, mujoco.mjtGeom.mjGEOM_CAPSULE, radius, points[a], points[b])
-        scene.ngeom += 1
+        return 0
+    return draw_bead(scene, Bead(points, widths, heights, times), rgba)
 
 
 def render_video(ur_type: str, tool: str | None, meshes, t: np.ndarray, q: np.ndarray, out_mp4: Path,
@@ -96,7 +85,7 @@ def render_video(ur_type: str, tool: str | None, meshes, t: np.ndarray, q: np.nd
                 renderer.scene.flags[mujoco.mjtRndFlag.mjRND_REFLECTION] = 0
                 if bead is not None:
                     now = bead.until(bead_t0 + tf)
-                    add_bead(renderer.scene, now.points, now.widths, now.heights)
+                    add_bead(renderer.scene, now.points, now.widths, now.heights, now.times)
                 writer.send(np.ascontiguousarray(renderer.render()))
                 if progress is not None and (i % 15 == 14 or i == total - 1):
                     progress(i + 1, total, started)
