@@ -39,16 +39,18 @@ class DispenserIO:
     Args:
         node: The client's node (its executor spins elsewhere).
         controller_state: Topic of the trajectory controller's state (stamp and speed_scaling_factor).
-        half_period: Half the controller's period [s] (2 ms at 500 Hz would be 0.001).
+    The controller's period is taken from the stamps of consecutive state messages: an event is due half a
+    period early, so that the call lands in the cycle nearest to its time (within half a period: 1 ms at
+    500 Hz, 4 ms at 125 Hz, plus the service's delivery).
     """
 
-    def __init__(self, node: Node, controller_state: str, half_period: float = 0.001) -> None:
+    def __init__(self, node: Node, controller_state: str) -> None:
         self.node = node
         self.client = node.create_client(SetIO, SET_IO)
         self._lock = threading.Lock()
         self._clock: ScaledClock | None = None
         self._sequence: SwitchSequence | None = None
-        self._half = half_period
+        self._last_stamp: float | None = None
         self.records: list[SwitchRecord] = []
         self._pending: list[tuple[SwitchEvent, float, float, object]] = []
         node.create_subscription(JointTrajectoryControllerState, controller_state, self._on_state,
@@ -62,7 +64,7 @@ class DispenserIO:
         """Switch ``events`` on the clock of a goal that starts at robot time ``start`` [s]."""
         with self._lock:
             self._clock = ScaledClock(start)
-            self._sequence = SwitchSequence(events, self._half)
+            self._sequence = SwitchSequence(events)
 
     def disarm(self) -> list[SwitchEvent]:
         """Stop switching; return the events that did not happen."""
@@ -74,8 +76,11 @@ class DispenserIO:
     def _on_state(self, msg: JointTrajectoryControllerState) -> None:
         stamp = msg.header.stamp.sec + msg.header.stamp.nanosec * 1e-9
         with self._lock:
+            last, self._last_stamp = self._last_stamp, stamp
             if self._clock is None:
                 return
+            if last is not None and 0.0 < stamp - last < 0.1:
+                self._sequence.half_period = 0.5 * (stamp - last)
             t = self._clock.update(stamp, msg.speed_scaling_factor)
             due = self._sequence.due(t)
         for event in due:
