@@ -55,6 +55,8 @@ class PathSpec:
             leaning towards the robot base.
         point_spacing: 'auto': distance [m] between generated waypoints.
         corner_max_deviation: Largest distance [m] of the rounded path from a corner waypoint.
+        follow_surface: Lay the path between the waypoints onto the glass (at the standoff), instead of
+            straight chords that rise above a curved glass.
     """
 
     source: str
@@ -65,6 +67,7 @@ class PathSpec:
     tilt_deg: float
     point_spacing: float
     corner_max_deviation: float
+    follow_surface: bool = True
 
 
 @dataclass(frozen=True)
@@ -159,6 +162,7 @@ _WINDSHIELD_DEFAULTS = {"mesh": "meshes/windshield.stl", "pose": {"xyz": [0.0, 0
 _PATH_DEFAULTS: dict[str, Any] = {
     "source": "waypoints", "waypoints": None, "orientation_zyx": list(DEFAULT_ORIENTATION_ZYX), "closed": True,
     "inset": 0.03, "tilt_deg": 18.0, "point_spacing": 0.01, "corner_max_deviation": 0.02,
+    "follow_surface": True,
 }
 _TOL_DEFAULTS = {"path_position": 0.1, "goal_position": 0.01, "goal_time_tolerance": 0.5}
 
@@ -284,7 +288,8 @@ def parse_job(raw: Any, source_file: str = "") -> GlueJob:
             tilt_deg=_number(pth["tilt_deg"], "path.tilt_deg", 0.0, 60.0),
             point_spacing=_number(pth["point_spacing"], "path.point_spacing", 0.002, 0.1),
             corner_max_deviation=_number(pth["corner_max_deviation"], "path.corner_max_deviation", 0.0, 0.1,
-                                         lo_open=True)),
+                                         lo_open=True),
+            follow_surface=_bool(pth["follow_surface"], "path.follow_surface")),
         standoff=_number(top["standoff"], "standoff", 0.0, 0.05),
         tcp_speed=_number(top["tcp_speed"], "tcp_speed", 0.0, 1.0, lo_open=True),
         sample_time=_number(top["sample_time"], "sample_time", 0.001, 0.1),

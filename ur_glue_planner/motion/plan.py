@@ -26,8 +26,9 @@ from ur_glue_planner.motion.kinematics import Kinematics, ur_kinematics
 from ur_glue_planner.motion.seed1 import seed1_bead
 from ur_glue_planner.path.glue_path import GluePath, build_glue_path
 from ur_glue_planner.path.run_up import RunUpPath
+from ur_glue_planner.path.surface_path import SurfacePath
 from ur_glue_planner.path.timing import PathTiming, time_path
-from ur_glue_planner.scene.waypoints import job_waypoints, tool_axis
+from ur_glue_planner.scene.waypoints import job_waypoints, tool_axis, windshield_model
 from ur_sim_driver.description.params import load_ur_params
 
 
@@ -77,8 +78,9 @@ class GluePlan:
         kinematics: Tip kinematics used.
         waypoints: (K, 3) [m]; orientations: (K, 3, 3); world frame.
         path: Bead geometry (the intended line). nominal_timing: the motion's time law before any slowdown.
-        motion_path: What the tip walks during the bead segment: ``path``, or with a flying start a
-            RunUpPath; bead.s is its arc length, and ``run_up`` [m] is where the bead itself starts on it.
+        motion_path: What the tip walks during the bead segment: ``path`` (laid onto the glass by a
+            SurfacePath with ``path.follow_surface``), with a flying start inside a RunUpPath; bead.s is its arc
+            length, and ``run_up`` [m] is where the bead itself starts on it.
         branch: The IK branch of the bead start (None if the job gave ``ik_seed_deg``);
             branches: all examined.
         bead: The bead in joint space (its ``timing`` is the final time law).
@@ -159,10 +161,13 @@ def plan_job(job: GlueJob, q_current: np.ndarray, qd_current: np.ndarray | None 
     points, rots = job_waypoints(job)
     path = build_glue_path(points, rots, max_deviation=job.path.corner_max_deviation, closed=job.path.closed)
     seed1 = job.method == "seed1"
-    motion_path, run_up = path, 0.0
+    bead_path = path
+    if job.path.follow_surface and not seed1:
+        bead_path = SurfacePath(path, windshield_model(job.windshield), job.standoff)
+    motion_path, run_up = bead_path, 0.0
     if path.closed and job.dispenser.flying_start and not seed1:
         run_up = run_up_length(job.dispenser, job.tcp_speed, job.ramp_time)
-        motion_path = RunUpPath(path, run_up, run_up)
+        motion_path = RunUpPath(bead_path, run_up, run_up)
     nominal = time_path(motion_path.length, job.tcp_speed, job.sample_time, job.ramp_time)
 
     branch, branches = None, ()
@@ -178,7 +183,7 @@ def plan_job(job: GlueJob, q_current: np.ndarray, qd_current: np.ndarray | None 
     else:
         bead = build_joint_plan(motion_path, nominal, kin, q_guess, a_max=params.a_max)
         ss = np.linspace(0.0, path.length, max(2, int(np.ceil(path.length / 0.001)) + 1))
-        line = path.sample(ss)[0]
+        line = bead_path.sample(ss)[0]
     dispense = schedule_dispenser(job.dispenser, bead.times, bead.s, bead.tcp_speed, run_up,
                                   bead.s[-1] if seed1 else run_up + path.length, job.tcp_speed)
 
