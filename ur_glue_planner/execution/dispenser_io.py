@@ -15,12 +15,25 @@ from dataclasses import dataclass
 from control_msgs.msg import JointTrajectoryControllerState
 from rclpy.node import Node
 from rclpy.qos import QoSProfile
+from ur_msgs.msg import IOStates
 from ur_msgs.srv import SetIO
 
 from ur_glue_planner.errors import ClientError
 from ur_glue_planner.execution.switch_timer import ScaledClock, SwitchEvent, SwitchSequence
 
 SET_IO = '/io_and_status_controller/set_io'
+IO_STATES = '/io_and_status_controller/io_states'
+
+
+@dataclass(frozen=True)
+class OutputChange:
+    """The output as the robot reported it on io_states: its new state, seen at robot time [s] (the newest
+    controller_state stamp then, within a cycle or two) and at trajectory time [s] (None outside a bead)."""
+
+    pin: int
+    state: bool
+    robot_time: float
+    trajectory_time: float | None
 
 
 @dataclass(frozen=True)
@@ -52,9 +65,12 @@ class DispenserIO:
         self._sequence: SwitchSequence | None = None
         self._last_stamp: float | None = None
         self.records: list[SwitchRecord] = []
+        self.changes: list[OutputChange] = []
+        self._watched: dict[int, bool] = {}
         self._pending: list[tuple[SwitchEvent, float, float, object]] = []
         node.create_subscription(JointTrajectoryControllerState, controller_state, self._on_state,
                                  QoSProfile(depth=20))
+        node.create_subscription(IOStates, IO_STATES, self._on_io, QoSProfile(depth=20))
 
     def available(self, timeout: float = 2.0) -> bool:
         """Whether the set_io service answers (the io_and_status_controller is running)."""
@@ -65,6 +81,9 @@ class DispenserIO:
         with self._lock:
             self._clock = ScaledClock(start)
             self._sequence = SwitchSequence(events)
+            self.changes = []
+            for e in events:
+                self._watched.setdefault(e.pin, False)
 
     def disarm(self) -> list[SwitchEvent]:
         """Stop switching; return the events that did not happen."""
@@ -87,6 +106,15 @@ class DispenserIO:
             future = self.client.call_async(SetIO.Request(fun=SetIO.Request.FUN_SET_DIGITAL_OUT, pin=event.pin,
                                                           state=1.0 if event.state else 0.0))
             self._pending.append((event, stamp, t, future))
+
+    def _on_io(self, msg: IOStates) -> None:
+        with self._lock:
+            for pin, known in list(self._watched.items()):
+                if pin < len(msg.digital_out_states) and bool(msg.digital_out_states[pin].state) != known:
+                    self._watched[pin] = not known
+                    stamp = self._last_stamp if self._last_stamp is not None else float('nan')
+                    self.changes.append(OutputChange(pin, not known, stamp,
+                                                     self._clock.time if self._clock is not None else None))
 
     def collect(self) -> list[SwitchRecord]:
         """Records of every call so far (answers that arrived are filled in)."""

@@ -124,7 +124,8 @@ def execute(ur: URClient, plan: GluePlan, stop: threading.Event, log: Callable[[
                     if missed and outcome.succeeded:
                         log(f'dispenser: {", ".join(e.what for e in missed)} did not happen before the bead ended')
                     gun.off(plan.dispense.pin)
-                    switches = tuple(gun.collect())
+                    ur.sleep(0.05)  # the off state reaches io_states
+                    switches = tuple(gun.collect()) + tuple(gun.changes)
                 # the gun's off delay and its flow's fall: the bead grows for a moment after the switch
                 ur.sleep(0.2 + (job.dispenser.off_delay + 5.0 * job.dispenser.time_constant if gun else 0.0))
                 rec = ur.stop_recording(recorder, raw=True)

@@ -98,12 +98,18 @@ def dispenser_summary(plan: GluePlan, run: Executed | None) -> dict:
            'on_delay_s': plan.job.dispenser.on_delay, 'off_delay_s': plan.job.dispenser.off_delay,
            'time_constant_s': plan.job.dispenser.time_constant, 'flying_start': plan.run_up > 0.0,
            'run_up_m': plan.run_up, **{k: v for k, v in d.as_dict().items() if k not in ('pin', 'flow_rate')}}
-    calls = []
+    calls, applied = [], []
+    planned = {True: d.t_on, False: d.t_off}
     for r in (run.switches if run is not None else ()):
-        calls.append({'what': r.event.what, 'planned_t_s': r.event.t, 'called_at_t_s': r.trajectory_time,
-                      'error_ms': 1e3 * (r.trajectory_time - r.event.t), 'robot_time_s': r.robot_time,
-                      'success': r.success})
+        if hasattr(r, 'event'):
+            calls.append({'what': r.event.what, 'planned_t_s': r.event.t, 'called_at_t_s': r.trajectory_time,
+                          'error_ms': 1e3 * (r.trajectory_time - r.event.t), 'robot_time_s': r.robot_time,
+                          'success': r.success})
+        elif r.trajectory_time is not None:
+            applied.append({'state': r.state, 'planned_t_s': planned[r.state], 'seen_at_t_s': r.trajectory_time,
+                            'error_ms': 1e3 * (r.trajectory_time - planned[r.state]), 'robot_time_s': r.robot_time})
     out['calls'] = calls
+    out['applied'] = applied  # when the robot's io_states showed the output change
     return out
 
 
@@ -139,6 +145,10 @@ def write_report(plan: GluePlan, run: Executed | None, result_code: int | None, 
     _plot_paths_3d(plan, exec_pos, out / 'tip_path_3d.png')
     if render:
         _render(plan, exec_pos, out / 'render.png')
+    dep = getattr(run, 'deposit', None) if run is not None else None
+    if dep is not None:
+        np.savez_compressed(out / 'bead.npz', points=dep.points, widths=dep.widths, heights=dep.heights,
+                            times=dep.times, line=plan.line)
     summary = summarize(plan, run, result_code, result_text)
     (out / 'summary.json').write_text(json.dumps(summary, indent=2))
     return summary

@@ -19,7 +19,7 @@ from ur_glue_planner.report.render import scene_xml
 from ur_sim_driver.bead import Bead, draw_bead
 from ur_sim_driver.description.params import joint_names
 
-_MAX_BEAD_SEGMENTS = 800  # geoms per frame for the bead (draw_bead thins the bead to the renderer's budget)
+_MAX_BEAD_SEGMENTS = 400  # geoms per frame for the bead (draw_bead thins the bead to the renderer's budget)
 BEAD_RGBA = (0.95, 0.55, 0.1, 1.0)
 
 
@@ -61,6 +61,7 @@ def render_video(ur_type: str, tool: str | None, meshes, t: np.ndarray, q: np.nd
     model = mujoco.MjModel.from_xml_string(scene_xml(ur_type, tool, meshes, width, height))
     # software rendering (no GPU here): shadows and reflections cost 4x a frame; 2x multisampling keeps edges clean
     model.vis.quality.offsamples = 2
+    model.vis.quality.numslices, model.vis.quality.numstacks = 12, 6  # capsules of the bead: 1/6 the triangles
     data = mujoco.MjData(model)
     adr = [model.jnt_qposadr[mujoco.mj_name2id(model, mujoco.mjtObj.mjOBJ_JOINT, n)] for n in joint_names()]
     camera = mujoco.MjvCamera()
@@ -75,7 +76,7 @@ def render_video(ur_type: str, tool: str | None, meshes, t: np.ndarray, q: np.nd
                                          output_params=['-movflags', '+faststart'])
     writer.send(None)
     try:
-        with mujoco.Renderer(model, height, width, max_geom=_MAX_BEAD_SEGMENTS + 500) as renderer:
+        with mujoco.Renderer(model, height, width, max_geom=model.ngeom + 100 + _MAX_BEAD_SEGMENTS) as renderer:
             for i, tf in enumerate(frames_t):
                 for j, a in enumerate(adr):
                     data.qpos[a] = np.interp(tf, t, q[:, j])
