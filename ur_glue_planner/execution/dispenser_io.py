@@ -81,7 +81,7 @@ class DispenserIO:
         with self._lock:
             self._clock = ScaledClock(start)
             self._sequence = SwitchSequence(events)
-            self.changes = []
+            self.changes, self.records, self._pending = [], [], []
             for e in events:
                 self._watched.setdefault(e.pin, False)
 
@@ -114,7 +114,7 @@ class DispenserIO:
                     self._watched[pin] = not known
                     stamp = self._last_stamp if self._last_stamp is not None else float('nan')
                     self.changes.append(OutputChange(pin, not known, stamp,
-                                                     self._clock.time if self._clock is not None else None))
+                                                     self._clock.now if self._clock is not None else None))
 
     def collect(self) -> list[SwitchRecord]:
         """Records of every call so far (answers that arrived are filled in)."""

@@ -21,17 +21,20 @@ class ScaledClock:
         self.start = start
         self._t = 0.0
         self._last: float | None = None
+        self.now = float('-inf')  # the value the last update returned
 
     def update(self, stamp: float, factor: float) -> float:
         """Advance to ``stamp`` with the factor the controller used since the previous sample; return the
         trajectory time (negative before the start)."""
         if stamp <= self.start:
             self._last = None
-            return stamp - self.start
+            self.now = stamp - self.start
+            return self.now
         since = self.start if self._last is None else self._last
         if stamp > since:
             self._t += (stamp - since) * min(max(factor, 0.0), 1.0)
             self._last = stamp
+        self.now = self._t
         return self._t
 
     @property

@@ -163,7 +163,8 @@ def plan_job(job: GlueJob, q_current: np.ndarray, qd_current: np.ndarray | None 
     seed1 = job.method == "seed1"
     bead_path = path
     if job.path.follow_surface and not seed1:
-        bead_path = SurfacePath(path, windshield_model(job.windshield), job.standoff)
+        bead_path = SurfacePath(path, windshield_model(job.windshield), job.standoff,
+                                tuple(float(x) for x in tool_axis(job.tool)))
     motion_path, run_up = bead_path, 0.0
     if path.closed and job.dispenser.flying_start and not seed1:
         run_up = run_up_length(job.dispenser, job.tcp_speed, job.ramp_time)

@@ -1,13 +1,14 @@
-"""A bead path laid onto the glass: every point of the planned path moved along the surface normal to the job's
-standoff above the windshield.
+"""A bead path laid onto the glass: every point of the planned path moved onto the windshield, and the tip placed
+on the nozzle axis through that point, the job's standoff above the glass (measured along the normal).
 
 Clicked waypoints lie on the glass, but the straight stretches between them are chords of a curved surface: on
 seed 1's 22 clicks they rise up to 2 mm above the concave glass. The glue, leaving along the tilted nozzle axis,
 then lands up to 0.65 mm beside the clicked line. Walking the path's projection instead keeps the tip at the
-standoff everywhere (and the bead on the line). The projection is smooth (the glass is an analytic surface), so
-the tangent and the curvature vector are taken by central differences of the projected points (h = 0.1 mm and
-1 mm: errors far below the IK tolerance); the arc length is the original path's, which differs from the
-projection's own by less than 0.01 %.
+standoff everywhere and the bead on the line: the tip backs off along the (tilted) nozzle axis, not along the
+normal, so that the material, which leaves along the axis, lands on the line at any standoff. The projection is
+smooth (the glass is an analytic surface), so the tangent and the curvature vector are taken by central differences
+of the projected points (h = 0.1 mm and 1 mm: errors far below the IK tolerance); the arc length is the original
+path's, which differs from the projection's own by less than 0.01 %.
 """
 from __future__ import annotations
 
@@ -28,11 +29,13 @@ class SurfacePath:
 
     Attributes:
         path: The planned path (corners rounded). surface: The windshield. standoff: [m] above the glass.
+        axis: The nozzle axis (3,) in the tip frame (it points at the glass).
     """
 
     path: GluePath
     surface: WindshieldModel
     standoff: float
+    axis: tuple[float, float, float] = (0.0, 0.0, 1.0)
 
     @property
     def closed(self) -> bool:
@@ -48,9 +51,14 @@ class SurfacePath:
 
     def position(self, s: np.ndarray | float) -> np.ndarray:
         """Projected points (M, 3) [m] (or (3,) for a scalar s)."""
-        pos = np.atleast_2d(self.path.sample(np.atleast_1d(np.asarray(s, dtype=float)))[0])
+        ss = np.atleast_1d(np.asarray(s, dtype=float))
+        pos = np.atleast_2d(self.path.sample(ss)[0])
         _, foot, normal = self.surface.project(pos)
-        out = foot + self.standoff * normal
+        out = foot
+        if self.standoff > 0.0:
+            axis = np.atleast_3d(self.path.orientation(ss)).reshape(-1, 3, 3) @ np.asarray(self.axis, dtype=float)
+            along = self.standoff / np.maximum(-np.sum(axis * normal, axis=1), 0.1)  # axis length to that height
+            out = foot - along[:, None] * axis
         return out[0] if np.ndim(s) == 0 else out
 
     def _derivatives(self, s: np.ndarray) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
