@@ -88,8 +88,8 @@ class GluePlan:
         descent, retreat: Straight tool-axis moves onto and off the bead, or None.
         summary: Headline numbers.
         dispense: When the glue gun is switched (bead segment time).
-        line: The intended bead centre line (P, 3) [m], about 1 mm apart: the rounded path, or for seed 1
-            the waypoint polyline it walks.
+        line: The intended bead centre line (P, 3) [m], about 1 mm apart: the rounded path on the glass (the
+            tip stands off above it along the nozzle axis), or for seed 1 the waypoint polyline it walks.
         method: 'constant_speed' (ours) or 'seed1'.
     """
 
@@ -184,7 +184,8 @@ def plan_job(job: GlueJob, q_current: np.ndarray, qd_current: np.ndarray | None 
     else:
         bead = build_joint_plan(motion_path, nominal, kin, q_guess, a_max=params.a_max)
         ss = np.linspace(0.0, path.length, max(2, int(np.ceil(path.length / 0.001)) + 1))
-        line = bead_path.sample(ss)[0]
+        line = windshield_model(job.windshield).project(bead_path.sample(ss)[0])[1] \
+            if job.path.follow_surface else bead_path.sample(ss)[0]
     dispense = schedule_dispenser(job.dispenser, bead.times, bead.s, bead.tcp_speed, run_up,
                                   bead.s[-1] if seed1 else run_up + path.length, job.tcp_speed)
 
