@@ -150,3 +150,15 @@ def test_dispenser_switches_while_the_tip_cruises(plan):
     np.testing.assert_allclose(start, np.ravel(plan.path.sample(0.0)[0]), atol=5e-4)
     np.testing.assert_allclose(end, start, atol=5e-4)
     np.testing.assert_allclose(plan.line[0], start, atol=5e-4)
+
+
+def test_the_intended_line_lies_on_the_glass_under_the_tip_axis():
+    plan = plan_job(parse_job({"standoff": 0.01}), np.radians([0.0, -90.0, 0.0, -90.0, 0.0, 0.0]))
+    _, foot, normal = DEFAULT_WINDSHIELD.project(plan.line)
+    assert np.abs(plan.line - foot).max() < 1e-6
+    # the nozzle axis from the tip at the bead start meets the glass at the line's start
+    k = int(np.searchsorted(plan.bead.times, plan.dispense.t_arrive))
+    pose = plan.kinematics.fk(plan.bead.q[k])
+    axis = pose[:3, :3] @ np.array([0.0, 1.0, 0.0])
+    t = (plan.line[0] - pose[:3, 3]) @ normal[0] / (axis @ normal[0])
+    assert np.linalg.norm(pose[:3, 3] + t * axis - plan.line[0]) < 2e-3  # within one sample of travel (3 mm)

@@ -19,8 +19,8 @@ def windshield_sim():
 
 
 def test_default_job_runs_and_writes_the_report(windshield_sim, tmp_path):
-    code = run_job({'job': str(config_dir() / 'glue_job.yaml'), 'out_dir': str(tmp_path), 'render': True},
-                   threading.Event(), context=windshield_sim.client.context)
+    code = run_job({'job': str(config_dir() / 'glue_job.yaml'), 'out_dir': str(tmp_path), 'render': True,
+                    'video': False}, threading.Event(), context=windshield_sim.client.context)
     assert code == 0
     summary = json.loads((tmp_path / 'summary.json').read_text())
     assert summary['result']['error_code'] == 0
@@ -29,8 +29,13 @@ def test_default_job_runs_and_writes_the_report(windshield_sim, tmp_path):
     assert executed['max_tip_deviation_mm'] < 0.5
     assert abs(summary['bead_length_m'] - 2.2) < 0.1
     for name in ('joint_position', 'joint_velocity', 'joint_acceleration', 'tcp_speed', 'tip_path_3d',
-                 'joint_position_planned_vs_measured', 'render'):
+                 'joint_position_planned_vs_measured', 'render', 'bead'):
         assert (tmp_path / f'{name}.png').stat().st_size > 10_000, name
+    # the gun was switched on and off, and the simulated bead was collected and judged (its accuracy is
+    # test_glue_bead_e2e's, on a real-time simulation)
+    assert [c['what'] for c in summary['dispenser']['calls']] == ['gun on', 'gun off']
+    assert summary['bead']['deposit_points'] > 1000 and summary['bead']['gap_length_mm'] < 50.0
+    assert (tmp_path / 'index.html').is_file() and not (tmp_path / 'run.mp4').exists()
 
 
 def test_invalid_job_exits_2_naming_the_field(tmp_path, capsys):

@@ -184,8 +184,9 @@ def plan_job(job: GlueJob, q_current: np.ndarray, qd_current: np.ndarray | None 
     else:
         bead = build_joint_plan(motion_path, nominal, kin, q_guess, a_max=params.a_max)
         ss = np.linspace(0.0, path.length, max(2, int(np.ceil(path.length / 0.001)) + 1))
-        line = windshield_model(job.windshield).project(bead_path.sample(ss)[0])[1] \
-            if job.path.follow_surface else bead_path.sample(ss)[0]
+        # the glass under the path (the tip may stand off along the tilted axis, the bead does not)
+        line = windshield_model(job.windshield).project(path.sample(ss)[0])[1] \
+            if job.path.follow_surface else path.sample(ss)[0]
     dispense = schedule_dispenser(job.dispenser, bead.times, bead.s, bead.tcp_speed, run_up,
                                   bead.s[-1] if seed1 else run_up + path.length, job.tcp_speed)
 
