@@ -97,7 +97,7 @@ def plot_bead(axes, prof: StationProfile, figures: dict, title: str) -> None:
 def write_bead_figure(results: list[tuple[str, StationProfile, dict]], path: Path) -> Path:
     """One column per method (label, profile, figures), side by side, as a PNG."""
     fig, axes = plt.subplots(2, len(results), figsize=(7 * len(results), 6.5), constrained_layout=True,
-                             squeeze=False, sharey='row')
+                             squeeze=False)
     for col, (label, prof, figures) in enumerate(results):
         plot_bead(axes[:, col], prof, figures, label)
     fig.suptitle('Glue bead on the glass: width and placement along the bead')

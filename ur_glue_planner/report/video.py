@@ -42,8 +42,8 @@ def add_bead(scene: mujoco.MjvScene, points: np.ndarray, widths: np.ndarray, hei
 
 def render_video(ur_type: str, tool: str | None, meshes, t: np.ndarray, q: np.ndarray, out_mp4: Path,
                  bead=None, bead_t0: float = 0.0, fps: int = 30, width: int = 640, height: int = 480,
-                 lookat: Sequence[float] = (0.0, 0.55, 0.25), distance: float = 1.6, azimuth: float = 120.0,
-                 elevation: float = -40.0, progress: Callable[[int, int, float], None] | None = _progress) -> dict:
+                 lookat: Sequence[float] = (0.0, 0.6, 0.2), distance: float = 1.5, azimuth: float = -60.0,
+                 elevation: float = -45.0, progress: Callable[[int, int, float], None] | None = _progress) -> dict:
     """Write the run as an MP4.
 
     Args:
