@@ -6,8 +6,7 @@ import threading
 
 import imageio_ffmpeg
 import pytest
-import yaml
-from sim_harness import running_sim
+from sim_harness import running_sim, yaml_params
 
 from ur_glue_planner.execution.node import run_job
 from ur_sim_driver.scene import config_dir
@@ -17,7 +16,7 @@ V = 0.15
 
 @pytest.fixture(scope='module')
 def demo(tmp_path_factory):
-    params = yaml.safe_load((config_dir() / 'ur_sim_windshield.yaml').read_text())['/**']['ros__parameters']
+    params = yaml_params(config_dir() / 'ur_sim_windshield.yaml')
     params['real_time_factor'] = 1.0
     out = tmp_path_factory.mktemp('glue_job')
     with running_sim(**params) as h:

@@ -4,7 +4,7 @@ import threading
 
 import pytest
 import yaml
-from sim_harness import running_sim
+from sim_harness import running_sim, yaml_params
 
 from ur_glue_planner.execution.node import run_job
 from ur_sim_driver.scene import config_dir
@@ -12,7 +12,7 @@ from ur_sim_driver.scene import config_dir
 
 @pytest.fixture(scope='module')
 def windshield_sim():
-    params = yaml.safe_load((config_dir() / 'ur_sim_windshield.yaml').read_text())['/**']['ros__parameters']
+    params = yaml_params(config_dir() / 'ur_sim_windshield.yaml')
     params['real_time_factor'] = 0.0
     with running_sim(**params) as h:
         yield h
