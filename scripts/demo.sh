@@ -20,10 +20,10 @@ stop_sim() {
 }
 trap stop_sim EXIT
 status=0
-ur_glue_planner --ros-args -p job:=config/glue_job.yaml -p out_dir:=out/glue_job "$@" || status=$?
+ur_glue_planner --ros-args -p job:=config/glue_job.yaml -p out_dir:=out/glue_job -p compare:=true "$@" || status=$?
 stop_sim
 if [ "$status" -eq 0 ]; then
-  echo "demo: done. Report: $ROOT/out/glue_job (summary.json, *.png)"
+  echo "demo: done. Report: $ROOT/out/glue_job/index.html (video run.mp4, bead.png, summary.json, *.png)"
 else
   echo "demo: the planner exited with status $status; see the messages above and out/ur_sim.log" >&2
 fi

@@ -6,6 +6,7 @@ import time
 from collections.abc import Iterator
 from contextlib import contextmanager
 from dataclasses import dataclass, field
+from pathlib import Path
 
 import numpy as np
 import rclpy
@@ -201,6 +202,19 @@ def _flatten(params: dict, prefix: str = '') -> dict:
 
 def _param(name, value) -> Parameter:
     return Parameter(name, value=value)
+
+
+def yaml_params(path) -> dict:
+    """The ros__parameters of a ur_sim parameter file, nested sections flattened to dotted names
+    (``dispenser: {pin: 16}`` -> ``dispenser.pin``), as ``--params-file`` gives them to the node."""
+    import yaml
+
+    def flat(d: dict, prefix: str = '') -> dict:
+        out = {}
+        for k, v in d.items():
+            out.update(flat(v, f'{prefix}{k}.') if isinstance(v, dict) else {f'{prefix}{k}': v})
+        return out
+    return flat(yaml.safe_load(Path(path).read_text())['/**']['ros__parameters'])
 
 
 @contextmanager

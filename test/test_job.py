@@ -113,3 +113,26 @@ def test_unreadable_files_raise_job_error(tmp_path):
     bad.write_text("- just a list\n")
     with pytest.raises(JobError, match="job: must be a mapping"):
         load_job(bad)
+
+
+def test_dispenser_defaults_are_ur_sims(job):
+    d = job.dispenser
+    assert (d.pin, d.flow_rate, d.nozzle_diameter) == (16, 6.0, 6.0)
+    assert (d.on_delay, d.off_delay, d.time_constant) == (0.05, 0.03, 0.05)
+    assert d.flying_start and d.kind == "tool" and job.method == "constant_speed"
+
+
+@pytest.mark.parametrize("raw, field, hint", [
+    ({"dispenser": {"pin": 18}}, "dispenser.pin", "18 is not a digital output pin in [0, 17]"),
+    ({"dispenser": {"pin": True}}, "dispenser.pin", "True is not a digital output pin in [0, 17]"),
+    ({"dispenser": {"flow_rate": 0}}, "dispenser.flow_rate", "0 is not a number in (0, 100]"),
+    ({"dispenser": {"on_delay": -0.1}}, "dispenser.on_delay", "-0.1 is not a number in [0, 2]"),
+    ({"dispenser": {"off_delay": 3}}, "dispenser.off_delay", "3 is not a number in [0, 2]"),
+    ({"dispenser": {"time_constant": 2}}, "dispenser.time_constant", "2 is not a number in [0, 1]"),
+    ({"dispenser": {"nozzle": 6}}, "dispenser.nozzle", "unknown key; allowed: flow_rate"),
+    ({"method": "fast"}, "method", "'fast' is not one of: constant_speed, seed1"),
+])
+def test_bad_dispenser_and_method_fields_are_named(raw, field, hint):
+    with pytest.raises(JobError) as err:
+        parse_job(raw)
+    assert str(err.value).startswith(field) and hint in str(err.value)

@@ -132,3 +132,33 @@ def test_speed_within_weights_by_length():
     assert speed_within(s, np.array([1.0, 1.0, 0.5, 0.5]), 1.0) == pytest.approx(0.25)
     assert speed_within(s, np.array([1.0, 1.0, 1.005, 0.995]), 1.0) == pytest.approx(1.0)
     assert math.isclose(speed_within(s, np.zeros(4), 1.0), 0.0)
+
+
+def test_dispenser_switches_while_the_tip_cruises(plan):
+    # flying start: the tip runs up along the loop's tail, so material starts and stops at the commanded speed
+    d, job = plan.dispense, plan.job
+    assert plan.run_up == pytest.approx(V * (0.5 * job.ramp_time + 4 * job.dispenser.time_constant) + 0.005)
+    assert plan.motion_path.length == pytest.approx(plan.path.length + 2 * plan.run_up)
+    assert (d.s_start, d.s_end) == (pytest.approx(plan.run_up), pytest.approx(plan.run_up + plan.path.length))
+    assert d.speed_start == pytest.approx(V, rel=1e-3) and d.speed_end == pytest.approx(V, rel=1e-3)
+    assert d.lead == pytest.approx(job.dispenser.on_delay + job.dispenser.time_constant)
+    assert d.lag == pytest.approx(job.dispenser.off_delay + job.dispenser.time_constant)
+    assert 0.0 < d.t_on < d.t_arrive < d.t_off < d.t_leave < plan.bead.times[-1]
+    # the tip is where the bead starts and ends at those times, both the same point of the closed loop
+    start = np.array([np.interp(d.t_arrive, plan.bead.times, plan.bead.tip_pos[:, i]) for i in range(3)])
+    end = np.array([np.interp(d.t_leave, plan.bead.times, plan.bead.tip_pos[:, i]) for i in range(3)])
+    np.testing.assert_allclose(start, np.ravel(plan.path.sample(0.0)[0]), atol=5e-4)
+    np.testing.assert_allclose(end, start, atol=5e-4)
+    np.testing.assert_allclose(plan.line[0], start, atol=5e-4)
+
+
+def test_the_intended_line_lies_on_the_glass_under_the_tip_axis():
+    plan = plan_job(parse_job({"standoff": 0.01}), np.radians([0.0, -90.0, 0.0, -90.0, 0.0, 0.0]))
+    _, foot, normal = DEFAULT_WINDSHIELD.project(plan.line)
+    assert np.abs(plan.line - foot).max() < 1e-6
+    # the nozzle axis from the tip at the bead start meets the glass at the line's start
+    k = int(np.searchsorted(plan.bead.times, plan.dispense.t_arrive))
+    pose = plan.kinematics.fk(plan.bead.q[k])
+    axis = pose[:3, :3] @ np.array([0.0, 1.0, 0.0])
+    t = (plan.line[0] - pose[:3, 3]) @ normal[0] / (axis @ normal[0])
+    assert np.linalg.norm(pose[:3, 3] + t * axis - plan.line[0]) < 2e-3  # within one sample of travel (3 mm)

@@ -4,7 +4,7 @@ import threading
 
 import pytest
 import yaml
-from sim_harness import running_sim
+from sim_harness import running_sim, yaml_params
 
 from ur_glue_planner.execution.node import run_job
 from ur_sim_driver.scene import config_dir
@@ -12,15 +12,15 @@ from ur_sim_driver.scene import config_dir
 
 @pytest.fixture(scope='module')
 def windshield_sim():
-    params = yaml.safe_load((config_dir() / 'ur_sim_windshield.yaml').read_text())['/**']['ros__parameters']
+    params = yaml_params(config_dir() / 'ur_sim_windshield.yaml')
     params['real_time_factor'] = 0.0
     with running_sim(**params) as h:
         yield h
 
 
 def test_default_job_runs_and_writes_the_report(windshield_sim, tmp_path):
-    code = run_job({'job': str(config_dir() / 'glue_job.yaml'), 'out_dir': str(tmp_path), 'render': True},
-                   threading.Event(), context=windshield_sim.client.context)
+    code = run_job({'job': str(config_dir() / 'glue_job.yaml'), 'out_dir': str(tmp_path), 'render': True,
+                    'video': False}, threading.Event(), context=windshield_sim.client.context)
     assert code == 0
     summary = json.loads((tmp_path / 'summary.json').read_text())
     assert summary['result']['error_code'] == 0
@@ -29,8 +29,13 @@ def test_default_job_runs_and_writes_the_report(windshield_sim, tmp_path):
     assert executed['max_tip_deviation_mm'] < 0.5
     assert abs(summary['bead_length_m'] - 2.2) < 0.1
     for name in ('joint_position', 'joint_velocity', 'joint_acceleration', 'tcp_speed', 'tip_path_3d',
-                 'joint_position_planned_vs_measured', 'render'):
+                 'joint_position_planned_vs_measured', 'render', 'bead'):
         assert (tmp_path / f'{name}.png').stat().st_size > 10_000, name
+    # the gun was switched on and off, and the simulated bead was collected and judged (its accuracy is
+    # test_glue_bead_e2e's, on a real-time simulation)
+    assert [c['what'] for c in summary['dispenser']['calls']] == ['gun on', 'gun off']
+    assert summary['bead']['deposit_points'] > 1000 and summary['bead']['gap_length_mm'] < 50.0
+    assert (tmp_path / 'index.html').is_file() and not (tmp_path / 'run.mp4').exists()
 
 
 def test_invalid_job_exits_2_naming_the_field(tmp_path, capsys):

@@ -21,6 +21,9 @@ from ur_sim_driver.description.params import UR_TYPES
 from ur_sim_driver.description.tool import TOOL_CHOICES as TOOLS
 
 PATH_SOURCES = ("waypoints", "auto")
+METHODS = ("constant_speed", "seed1")
+#: UR digital outputs as ur_msgs/SetIO numbers them: 0-7 standard, 8-15 configurable, 16-17 tool.
+DIGITAL_OUTPUT_PINS = range(0, 18)
 
 
 @dataclass(frozen=True)
@@ -52,6 +55,8 @@ class PathSpec:
             leaning towards the robot base.
         point_spacing: 'auto': distance [m] between generated waypoints.
         corner_max_deviation: Largest distance [m] of the rounded path from a corner waypoint.
+        follow_surface: Lay the path between the waypoints onto the glass (at the standoff), instead of
+            straight chords that rise above a curved glass.
     """
 
     source: str
@@ -62,6 +67,7 @@ class PathSpec:
     tilt_deg: float
     point_spacing: float
     corner_max_deviation: float
+    follow_surface: bool = True
 
 
 @dataclass(frozen=True)
@@ -77,6 +83,36 @@ class Tolerances:
     path_position: tuple[float, ...]
     goal_position: tuple[float, ...]
     goal_time: float
+
+
+@dataclass(frozen=True)
+class DispenserSpec:
+    """The glue gun on a digital output; the defaults are ur_sim's (``dispenser.*`` parameters).
+
+    Attributes:
+        pin: SetIO digital output pin (0-7 standard, 8-15 configurable, 16-17 tool).
+        flow_rate: Material flow once fully open [ml/s].
+        nozzle_diameter: [mm].
+        on_delay: From the output switching on until material leaves the nozzle [s].
+        off_delay: From the output switching off until the flow starts to fall [s].
+        time_constant: First-order rise (and fall) of the flow after the delays [s].
+        flying_start: Closed loops: the tip runs up along the loop's tail and runs out past the
+            closure at cruise speed, so that material starts and stops while the tip moves at
+            the commanded speed (else the bead starts and ends with the tip at rest).
+    """
+
+    pin: int
+    flow_rate: float
+    nozzle_diameter: float
+    on_delay: float
+    off_delay: float
+    time_constant: float
+    flying_start: bool
+
+    @property
+    def kind(self) -> str:
+        """'standard', 'configurable' or 'tool' output."""
+        return "standard" if self.pin < 8 else "configurable" if self.pin < 16 else "tool"
 
 
 @dataclass(frozen=True)
@@ -105,6 +141,8 @@ class GlueJob:
     tolerances: Tolerances
     controller_name: str
     namespace: str
+    dispenser: DispenserSpec
+    method: str = "constant_speed"
     source_file: str = ""
 
 
@@ -113,13 +151,18 @@ _DEFAULTS: dict[str, Any] = {
     "sample_time": DEFAULT_SAMPLE_TIME, "ramp_time": 0.3, "approach_distance": 0.05, "retreat_distance": 0.05,
     "approach_speed": 0.05, "approach_min_duration": 4.0, "approach_velocity_scale": 0.5,
     "home_deg": [0.0, -90.0, 0.0, -90.0, 0.0, 0.0], "ik_seed_deg": None,
-    "controller_name": "scaled_joint_trajectory_controller", "namespace": "",
+    "controller_name": "scaled_joint_trajectory_controller", "namespace": "", "method": "constant_speed",
+}
+_DISPENSER_DEFAULTS: dict[str, Any] = {
+    "pin": 16, "flow_rate": 6.0, "nozzle_diameter": 6.0, "on_delay": 0.05, "off_delay": 0.03,
+    "time_constant": 0.05, "flying_start": True,
 }
 _WINDSHIELD_DEFAULTS = {"mesh": "meshes/windshield.stl", "pose": {"xyz": [0.0, 0.4, 0.15],
                                                                   "rpy": [math.radians(-55.0), 0.0, 0.0]}}
 _PATH_DEFAULTS: dict[str, Any] = {
     "source": "waypoints", "waypoints": None, "orientation_zyx": list(DEFAULT_ORIENTATION_ZYX), "closed": True,
     "inset": 0.03, "tilt_deg": 18.0, "point_spacing": 0.01, "corner_max_deviation": 0.02,
+    "follow_surface": True,
 }
 _TOL_DEFAULTS = {"path_position": 0.1, "goal_position": 0.01, "goal_time_tolerance": 0.5}
 
@@ -172,6 +215,13 @@ def _per_joint(value: Any, field: str) -> tuple[float, ...]:
     return tuple(float(x) for x in arr)
 
 
+def _pin(value: Any, field: str) -> int:
+    if isinstance(value, bool) or not isinstance(value, int) or value not in DIGITAL_OUTPUT_PINS:
+        raise JobError(f"{field}: {value!r} is not a digital output pin in [0, 17] "
+                       "(0-7 standard, 8-15 configurable, 16-17 tool)")
+    return value
+
+
 def _bool(value: Any, field: str) -> bool:
     if not isinstance(value, bool):
         raise JobError(f"{field}: {value!r} is not true or false")
@@ -190,7 +240,8 @@ def parse_job(raw: Any, source_file: str = "") -> GlueJob:
     Raises:
         JobError: An unknown key or an invalid value (the message names field, value and range).
     """
-    top = _section(raw, "", {**_DEFAULTS, "windshield": None, "path": None, "tolerances": None})
+    top = _section(raw, "", {**_DEFAULTS, "windshield": None, "path": None, "tolerances": None, "dispenser": None})
+    disp = _section(top["dispenser"], "dispenser", _DISPENSER_DEFAULTS)
     ws = _section(top["windshield"], "windshield", _WINDSHIELD_DEFAULTS)
     pose = _section(ws["pose"], "windshield.pose", _WINDSHIELD_DEFAULTS["pose"])
     pth = _section(top["path"], "path", _PATH_DEFAULTS)
@@ -237,7 +288,8 @@ def parse_job(raw: Any, source_file: str = "") -> GlueJob:
             tilt_deg=_number(pth["tilt_deg"], "path.tilt_deg", 0.0, 60.0),
             point_spacing=_number(pth["point_spacing"], "path.point_spacing", 0.002, 0.1),
             corner_max_deviation=_number(pth["corner_max_deviation"], "path.corner_max_deviation", 0.0, 0.1,
-                                         lo_open=True)),
+                                         lo_open=True),
+            follow_surface=_bool(pth["follow_surface"], "path.follow_surface")),
         standoff=_number(top["standoff"], "standoff", 0.0, 0.05),
         tcp_speed=_number(top["tcp_speed"], "tcp_speed", 0.0, 1.0, lo_open=True),
         sample_time=_number(top["sample_time"], "sample_time", 0.001, 0.1),
@@ -256,6 +308,15 @@ def parse_job(raw: Any, source_file: str = "") -> GlueJob:
             goal_time=_number(tol["goal_time_tolerance"], "tolerances.goal_time_tolerance", 0.0, 60.0)),
         controller_name=_text(top["controller_name"], "controller_name"),
         namespace=namespace,
+        dispenser=DispenserSpec(
+            pin=_pin(disp["pin"], "dispenser.pin"),
+            flow_rate=_number(disp["flow_rate"], "dispenser.flow_rate", 0.0, 100.0, lo_open=True),
+            nozzle_diameter=_number(disp["nozzle_diameter"], "dispenser.nozzle_diameter", 0.0, 30.0, lo_open=True),
+            on_delay=_number(disp["on_delay"], "dispenser.on_delay", 0.0, 2.0),
+            off_delay=_number(disp["off_delay"], "dispenser.off_delay", 0.0, 2.0),
+            time_constant=_number(disp["time_constant"], "dispenser.time_constant", 0.0, 1.0),
+            flying_start=_bool(disp["flying_start"], "dispenser.flying_start")),
+        method=_choice(top["method"], "method", METHODS),
         source_file=source_file,
     )
 

@@ -9,7 +9,10 @@ import threading
 import time
 from collections.abc import Callable
 
+from ur_glue_planner.execution.bead_listener import BeadListener
 from ur_glue_planner.execution.client import GoalOutcome, URClient
+from ur_glue_planner.execution.dispenser_io import DispenserIO
+from ur_glue_planner.execution.switch_timer import SwitchEvent
 from ur_glue_planner.motion.plan import GluePlan
 from ur_glue_planner.report.glue_report import Executed
 
@@ -59,8 +62,15 @@ def _print(text: str) -> None:
     print(text, flush=True)
 
 
+def dispenser_events(plan: GluePlan) -> list[SwitchEvent]:
+    """The plan's gun switching as events on the bead segment's trajectory clock."""
+    d = plan.dispense
+    return [SwitchEvent(d.t_on, d.pin, True, 'gun on'), SwitchEvent(d.t_off, d.pin, False, 'gun off')]
+
+
 def execute(ur: URClient, plan: GluePlan, stop: threading.Event, log: Callable[[str], None] = _print,
-            on_progress: Progress | None = None) -> tuple[GoalOutcome, Executed | None]:
+            on_progress: Progress | None = None, gun: DispenserIO | None = None,
+            bead: BeadListener | None = None) -> tuple[GoalOutcome, Executed | None]:
     """Run the plan's segments in order; returns the last outcome and the bead's recorded joint states.
 
     Args:
@@ -69,34 +79,74 @@ def execute(ur: URClient, plan: GluePlan, stop: threading.Event, log: Callable[[
         stop: Set to cancel: the active goal is cancelled and Interrupted raised.
         log: Receives the progress and result lines.
         on_progress: Called on every feedback message.
+        gun: Switches the glue gun during the bead (None: no dispensing). It is switched off at the end of
+            the bead, and at once on a failure or a cancel.
+        bead: The simulator's bead (None: not collected): cleared before the run, read after it.
     """
     job = plan.job
     path_tol = ur.tolerances(job.tolerances.path_position)
     goal_tol = ur.tolerances(job.tolerances.goal_position)
     recorder, outcome, run = None, None, None
-    for seg in plan.segments():
-        t0 = ur.start_time()
-        if seg.name == 'bead':
-            recorder = ur.start_recording(RECORD_RATE, t0)
-        log(f'{seg.name}: {len(seg.times)} points, {seg.duration:.2f} s')
-        feedback = _progress(seg.name, t0, seg.duration, log, on_progress)
-        goal = ur.follow_trajectory(seg.q, seg.qd, seg.qdd, seg.times, path_tolerance=path_tol,
-                                    goal_tolerance=goal_tol, goal_time_tolerance=job.tolerances.goal_time,
-                                    wait=False, start_time=t0, feedback_callback=feedback)
-        while not goal.done:
-            if stop.is_set():
-                log(f'\ninterrupted: cancelling the {seg.name} goal')
-                goal.cancel()
-                goal.wait(timeout=10.0)
-                raise Interrupted(seg.name)
-            time.sleep(0.02)
-        outcome = goal.wait()
-        if recorder is not None:
-            ur.sleep(0.2)
-            rec = ur.stop_recording(recorder, raw=True)
-            recorder = None
-            run = Executed(rec.t, rec.q, rec.qd)
-        if not outcome.succeeded:
-            log(f'{seg.name} failed: {describe(outcome)}')
-            return outcome, run
+    whole = ur.start_recording(RECORD_RATE)
+    bead_start, switches, deposit = None, (), None
+    if bead is not None:
+        bead.clear()
+    if gun is not None:
+        # the gun starts off, and the call path to set_io is exercised before it matters: a first request can
+        # take far longer than the next ones (DDS matching of the response path)
+        gun.off(plan.dispense.pin)
+    try:
+        for seg in plan.segments():
+            early = max(0.0, -plan.dispense.t_on) if (seg.name == 'bead' and gun is not None) else 0.0
+            t0 = ur.start_time(lead=0.1 + early)
+            if seg.name == 'bead':
+                recorder = ur.start_recording(RECORD_RATE, t0)
+                bead_start = t0
+                if gun is not None:
+                    gun.arm(dispenser_events(plan), t0)
+                    d = plan.dispense
+                    log(f'dispenser: output {d.pin} on at t = {d.t_on:.3f} s and off at t = {d.t_off:.3f} s of '
+                        f'the bead (lead {d.lead:.3f} s, lag {d.lag:.3f} s)')
+            log(f'{seg.name}: {len(seg.times)} points, {seg.duration:.2f} s')
+            feedback = _progress(seg.name, t0, seg.duration, log, on_progress)
+            goal = ur.follow_trajectory(seg.q, seg.qd, seg.qdd, seg.times, path_tolerance=path_tol,
+                                        goal_tolerance=goal_tol, goal_time_tolerance=job.tolerances.goal_time,
+                                        wait=False, start_time=t0, feedback_callback=feedback)
+            while not goal.done:
+                if stop.is_set():
+                    log(f'\ninterrupted: cancelling the {seg.name} goal')
+                    if gun is not None:
+                        gun.off(plan.dispense.pin)
+                    goal.cancel()
+                    goal.wait(timeout=10.0)
+                    raise Interrupted(seg.name)
+                time.sleep(0.02)
+            outcome = goal.wait()
+            if recorder is not None:
+                if gun is not None:
+                    missed = gun.disarm()
+                    if missed and outcome.succeeded:
+                        log(f'dispenser: {", ".join(e.what for e in missed)} did not happen before the bead ended')
+                    gun.off(plan.dispense.pin)
+                    ur.sleep(0.05)  # the off state reaches io_states
+                    switches = tuple(gun.collect()) + tuple(gun.changes)
+                # the gun's off delay and its flow's fall: the bead grows for a moment after the switch
+                ur.sleep(0.2 + (job.dispenser.off_delay + 5.0 * job.dispenser.time_constant if gun else 0.0))
+                rec = ur.stop_recording(recorder, raw=True)
+                recorder = None
+                deposit = bead.bead() if bead is not None else None
+                run = Executed(rec.t, rec.q, rec.qd)
+            if not outcome.succeeded:
+                log(f'{seg.name} failed: {describe(outcome)}')
+                break
+    finally:
+        if gun is not None:
+            try:
+                gun.off(plan.dispense.pin)
+            except Exception as exc:  # noqa: BLE001 - the original failure matters more; say this one too
+                log(f'dispenser: could not switch output {plan.dispense.pin} off: {exc}')
+        rec_all = ur.stop_recording(whole, raw=True)
+    if run is not None:
+        run = Executed(run.t, run.q, run.qd, whole=rec_all, start_stamp=bead_start, switches=switches,
+                       deposit=deposit, whole_t0=whole.start() if rec_all is not None else None)
     return outcome, run

@@ -19,12 +19,16 @@ import numpy as np
 from ur_glue_planner.errors import PlanningError
 from ur_glue_planner.job import GlueJob
 from ur_glue_planner.motion.approach import JointSegment, joint_move, tool_axis_move
+from ur_glue_planner.motion.dispense import DispenseSchedule, run_up_length, schedule_dispenser
 from ur_glue_planner.motion.ik_branch import Branch, choose_branch
 from ur_glue_planner.motion.joint_trajectory import JointPlan, build_joint_plan
 from ur_glue_planner.motion.kinematics import Kinematics, ur_kinematics
+from ur_glue_planner.motion.seed1 import seed1_bead
 from ur_glue_planner.path.glue_path import GluePath, build_glue_path
+from ur_glue_planner.path.run_up import RunUpPath
+from ur_glue_planner.path.surface_path import SurfacePath
 from ur_glue_planner.path.timing import PathTiming, time_path
-from ur_glue_planner.scene.waypoints import job_waypoints, tool_axis
+from ur_glue_planner.scene.waypoints import job_waypoints, tool_axis, windshield_model
 from ur_sim_driver.description.params import load_ur_params
 
 
@@ -73,13 +77,20 @@ class GluePlan:
         job: The job.
         kinematics: Tip kinematics used.
         waypoints: (K, 3) [m]; orientations: (K, 3, 3); world frame.
-        path: Bead geometry. nominal_timing: its time law before any slowdown.
+        path: Bead geometry (the intended line). nominal_timing: the motion's time law before any slowdown.
+        motion_path: What the tip walks during the bead segment: ``path`` (laid onto the glass by a
+            SurfacePath with ``path.follow_surface``), with a flying start inside a RunUpPath; bead.s is its arc
+            length, and ``run_up`` [m] is where the bead itself starts on it.
         branch: The IK branch of the bead start (None if the job gave ``ik_seed_deg``);
             branches: all examined.
         bead: The bead in joint space (its ``timing`` is the final time law).
         approach: Joint move from the current state to the descent start (or the bead start).
         descent, retreat: Straight tool-axis moves onto and off the bead, or None.
         summary: Headline numbers.
+        dispense: When the glue gun is switched (bead segment time).
+        line: The intended bead centre line (P, 3) [m], about 1 mm apart: the rounded path on the glass (the
+            tip stands off above it along the nozzle axis), or for seed 1 the waypoint polyline it walks.
+        method: 'constant_speed' (ours) or 'seed1'.
     """
 
     job: GlueJob
@@ -95,6 +106,11 @@ class GluePlan:
     descent: JointSegment | None
     retreat: JointSegment | None
     summary: PlanSummary
+    dispense: DispenseSchedule
+    line: np.ndarray
+    motion_path: GluePath | RunUpPath
+    run_up: float = 0.0
+    method: str = "constant_speed"
 
     def segments(self) -> tuple[JointSegment, ...]:
         """The motion in execution order, each starting at its own time 0."""
@@ -110,6 +126,15 @@ def speed_within(s: np.ndarray, speed: np.ndarray, target: float, tolerance: flo
     ok = np.abs(speed - target) <= tolerance * target
     ds = np.diff(s)
     return float(ds[ok[1:] & ok[:-1]].sum() / ds.sum())
+
+
+def densify(polyline: np.ndarray, step: float = 0.001) -> np.ndarray:
+    """Points (P, 3) along a polyline (K, 3) [m] at most ``step`` [m] apart, corners kept."""
+    out = [polyline[:1]]
+    for a, b in zip(polyline[:-1], polyline[1:]):
+        n = max(1, int(np.ceil(np.linalg.norm(b - a) / step)))
+        out.append(a + (np.arange(1, n + 1) / n)[:, None] * (b - a))
+    return np.vstack(out)
 
 
 def _check_limits(seg: JointSegment, kin: Kinematics, a_max: float) -> None:
@@ -135,15 +160,35 @@ def plan_job(job: GlueJob, q_current: np.ndarray, qd_current: np.ndarray | None 
     kin = ur_kinematics(job.ur_type, job.tool)
     points, rots = job_waypoints(job)
     path = build_glue_path(points, rots, max_deviation=job.path.corner_max_deviation, closed=job.path.closed)
-    nominal = time_path(path.length, job.tcp_speed, job.sample_time, job.ramp_time)
+    seed1 = job.method == "seed1"
+    bead_path = path
+    if job.path.follow_surface and not seed1:
+        bead_path = SurfacePath(path, windshield_model(job.windshield), job.standoff,
+                                tuple(float(x) for x in tool_axis(job.tool)))
+    motion_path, run_up = bead_path, 0.0
+    if path.closed and job.dispenser.flying_start and not seed1:
+        run_up = run_up_length(job.dispenser, job.tcp_speed, job.ramp_time)
+        motion_path = RunUpPath(bead_path, run_up, run_up)
+    nominal = time_path(motion_path.length, job.tcp_speed, job.sample_time, job.ramp_time)
 
     branch, branches = None, ()
     if job.ik_seed is not None:
         q_guess = np.array(job.ik_seed)
     else:
-        branch, branches = choose_branch(path, kin, np.array(job.home), job.tcp_speed)
+        branch, branches = choose_branch(motion_path, kin, np.array(job.home), job.tcp_speed)
         q_guess = branch.q
-    bead = build_joint_plan(path, nominal, kin, q_guess, a_max=params.a_max)
+    if seed1:
+        bead, corners = seed1_bead(kin, points, rots, q_guess, job.tcp_speed, job.sample_time, job.path.closed)
+        line = densify(corners)
+        nominal = bead.timing
+    else:
+        bead = build_joint_plan(motion_path, nominal, kin, q_guess, a_max=params.a_max)
+        ss = np.linspace(0.0, path.length, max(2, int(np.ceil(path.length / 0.001)) + 1))
+        # the glass under the path (the tip may stand off along the tilted axis, the bead does not)
+        line = windshield_model(job.windshield).project(path.sample(ss)[0])[1] \
+            if job.path.follow_surface else path.sample(ss)[0]
+    dispense = schedule_dispenser(job.dispenser, bead.times, bead.s, bead.tcp_speed, run_up,
+                                  bead.s[-1] if seed1 else run_up + path.length, job.tcp_speed)
 
     axis = tool_axis(job.tool)
     start_pose, end_pose = kin.fk(bead.q[0]), kin.fk(bead.q[-1])
@@ -182,6 +227,7 @@ def plan_job(job: GlueJob, q_current: np.ndarray, qd_current: np.ndarray | None 
         planning_seconds=time.perf_counter() - t0, slowdowns=len(bead.slowdowns))
     return GluePlan(job=job, kinematics=kin, waypoints=points, orientations=rots, path=path, nominal_timing=nominal,
                     branch=branch, branches=branches, bead=bead, approach=approach, descent=descent,
-                    retreat=retreat, summary=summary)
+                    retreat=retreat, summary=summary, dispense=dispense, line=line, motion_path=motion_path,
+                    run_up=run_up, method=job.method)
 
 

@@ -23,11 +23,19 @@ class Executed:
 
     Attributes:
         t: (K,) [s] from the bead start. q: (K, n) [rad]. qd: (K, n) [rad/s].
+        whole: The whole run's joint states (a Recording, t from ``whole_t0``), for the video.
+        start_stamp: Robot time [s] of the bead's trajectory start. whole_t0: robot time [s] of whole.t = 0.
+        switches: The dispenser's set_io calls (SwitchRecord). deposit: The simulated bead (BeadPoints) or None.
     """
 
     t: np.ndarray
     q: np.ndarray
     qd: np.ndarray
+    whole: object = None
+    start_stamp: float | None = None
+    switches: tuple = ()
+    deposit: object = None
+    whole_t0: float | None = None
 
 
 def executed_tip(plan: GluePlan, run: Executed) -> tuple[np.ndarray, np.ndarray]:
@@ -61,7 +69,13 @@ def summarize(plan: GluePlan, run: Executed | None, result_code: int | None, res
                     'slowdowns': len(bead.slowdowns), 'ik_seconds': bead.ik_seconds,
                     'planning_seconds': plan.summary.planning_seconds},
         'result': {'error_code': result_code, 'error_string': result_text},
+        'method': plan.method,
+        'dispenser': dispenser_summary(plan, run),
     }
+    from ur_glue_planner.report.bead_report import analyse_bead
+    bead_fig = analyse_bead(plan, run)
+    if bead_fig is not None:
+        summary['bead'] = bead_fig[0]
     if run is not None and len(run.t) > 1:
         inside = (run.t >= 0.0) & (run.t <= bead.times[-1])
         pos, speed = executed_tip(plan, Executed(run.t[inside], run.q[inside], run.qd[inside]))
@@ -75,6 +89,28 @@ def summarize(plan: GluePlan, run: Executed | None, result_code: int | None, res
             'max_joint_tracking_error_rad': float(tracking_error(run.t, run.q, bead.times, bead.q).max()),
         }
     return summary
+
+
+def dispenser_summary(plan: GluePlan, run: Executed | None) -> dict:
+    """The planned switching (bead trajectory time [s]) and, after a run, when each set_io call was made."""
+    d = plan.dispense
+    out = {'pin': d.pin, 'output': plan.job.dispenser.kind, 'flow_rate_ml_s': plan.job.dispenser.flow_rate,
+           'on_delay_s': plan.job.dispenser.on_delay, 'off_delay_s': plan.job.dispenser.off_delay,
+           'time_constant_s': plan.job.dispenser.time_constant, 'flying_start': plan.run_up > 0.0,
+           'run_up_m': plan.run_up, **{k: v for k, v in d.as_dict().items() if k not in ('pin', 'flow_rate')}}
+    calls, applied = [], []
+    planned = {True: d.t_on, False: d.t_off}
+    for r in (run.switches if run is not None else ()):
+        if hasattr(r, 'event'):
+            calls.append({'what': r.event.what, 'planned_t_s': r.event.t, 'called_at_t_s': r.trajectory_time,
+                          'error_ms': 1e3 * (r.trajectory_time - r.event.t), 'robot_time_s': r.robot_time,
+                          'success': r.success})
+        elif r.trajectory_time is not None:
+            applied.append({'state': r.state, 'planned_t_s': planned[r.state], 'seen_at_t_s': r.trajectory_time,
+                            'error_ms': 1e3 * (r.trajectory_time - planned[r.state]), 'robot_time_s': r.robot_time})
+    out['calls'] = calls
+    out['applied'] = applied  # when the robot's io_states showed the output change
+    return out
 
 
 def write_report(plan: GluePlan, run: Executed | None, result_code: int | None, result_text: str,
@@ -109,6 +145,10 @@ def write_report(plan: GluePlan, run: Executed | None, result_code: int | None, 
     _plot_paths_3d(plan, exec_pos, out / 'tip_path_3d.png')
     if render:
         _render(plan, exec_pos, out / 'render.png')
+    dep = getattr(run, 'deposit', None) if run is not None else None
+    if dep is not None:
+        np.savez_compressed(out / 'bead.npz', points=dep.points, widths=dep.widths, heights=dep.heights,
+                            times=dep.times, line=plan.line)
     summary = summarize(plan, run, result_code, result_text)
     (out / 'summary.json').write_text(json.dumps(summary, indent=2))
     return summary
@@ -141,12 +181,17 @@ def _plot_paths_3d(plan: GluePlan, executed: np.ndarray | None, path: Path) -> N
     plt.close(fig)
 
 
-def _render(plan: GluePlan, executed: np.ndarray | None, path: Path) -> None:
-    from ur_glue_planner.report.render import render_paths
+def scene_meshes(plan: GluePlan) -> list:
+    """The job's static meshes for renders: [(name, STL path, world pose (4, 4))]."""
     from ur_sim_driver.scene import config_dir, pose_matrix
     spec = plan.job.windshield
     mesh = Path(spec.mesh) if Path(spec.mesh).is_absolute() else config_dir().parent / spec.mesh
-    meshes = [('windshield', mesh, pose_matrix(spec.xyz, spec.rpy))]
+    return [('windshield', mesh, pose_matrix(spec.xyz, spec.rpy))]
+
+
+def _render(plan: GluePlan, executed: np.ndarray | None, path: Path) -> None:
+    from ur_glue_planner.report.render import render_paths
+    meshes = scene_meshes(plan)
     paths = [(plan.bead.tip_pos, (0.1, 0.3, 1.0, 1.0))]
     if executed is not None:
         paths.append((executed, (1.0, 0.1, 0.1, 1.0)))

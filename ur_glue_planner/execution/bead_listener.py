@@ -1,0 +1,87 @@
+"""The simulated bead from ur_sim: ``/ur_sim/glue_bead`` (sensor_msgs/PointCloud2) and ``/ur_sim/clear_glue_bead``.
+
+Simulation only: a real UR driver has neither, and the planner then reports no bead (``available`` is False).
+The cloud holds the whole bead so far (transient local): per deposit point x, y, z, width, height (float32, m)
+and t (float64, simulated seconds), in the robot's ``base`` frame, which the planner's world (``base_link``,
+the robot at the origin) sees rotated by pi about z. The message format is ``ur_sim_driver.bead``'s (a
+message helper, not the simulator).
+"""
+from __future__ import annotations
+
+import time
+from dataclasses import dataclass
+
+import numpy as np
+from rclpy.node import Node
+from rclpy.qos import DurabilityPolicy, QoSProfile
+from sensor_msgs.msg import PointCloud2
+from std_srvs.srv import Trigger
+
+from ur_glue_planner.errors import ClientError
+from ur_sim_driver.bead import BASE_IN_WORLD, from_cloud
+
+BEAD_TOPIC = '/ur_sim/glue_bead'
+CLEAR_SERVICE = '/ur_sim/clear_glue_bead'
+
+
+@dataclass(frozen=True, eq=False)
+class BeadPoints:
+    """Deposit points in time order, planner world frame: points (N, 3) [m], widths, heights (N,) [m], times (N,)
+    [s] of the robot's (simulated) clock."""
+
+    points: np.ndarray
+    widths: np.ndarray
+    heights: np.ndarray
+    times: np.ndarray
+
+    def until(self, t: float) -> BeadPoints:
+        """The bead as it was at time t [s]."""
+        k = int(np.searchsorted(self.times, t, side='right'))
+        return BeadPoints(self.points[:k], self.widths[:k], self.heights[:k], self.times[:k])
+
+
+def bead_from_cloud(msg: PointCloud2) -> BeadPoints:
+    """Read the bead cloud (ur_sim_driver.bead's format) in time order, turned from ``base`` to ``base_link``."""
+    bead = from_cloud(msg)
+    pts = np.asarray(bead.points, dtype=float) @ BASE_IN_WORLD[:3, :3].T
+    order = np.argsort(bead.times, kind='stable')
+    return BeadPoints(pts[order], np.asarray(bead.widths, float)[order], np.asarray(bead.heights, float)[order],
+                      np.asarray(bead.times, float)[order])
+
+
+class BeadListener:
+    """Keeps the newest bead cloud and clears the simulated bead on request."""
+
+    def __init__(self, node: Node) -> None:
+        self._msg: PointCloud2 | None = None
+        self._count = 0
+        latched = QoSProfile(depth=1, durability=DurabilityPolicy.TRANSIENT_LOCAL)
+        node.create_subscription(PointCloud2, BEAD_TOPIC, self._on_bead, latched)
+        self.clear_client = node.create_client(Trigger, CLEAR_SERVICE)
+
+    def _on_bead(self, msg: PointCloud2) -> None:
+        self._msg = msg
+        self._count += 1
+
+    @property
+    def received(self) -> int:
+        return self._count
+
+    def available(self, timeout: float = 2.0) -> bool:
+        """Whether the simulator's bead interfaces are there (ur_sim with a dispenser)."""
+        return self.clear_client.wait_for_service(timeout_sec=timeout)
+
+    def clear(self, timeout: float = 5.0) -> None:
+        """Remove the bead laid so far (the next job starts on clean glass)."""
+        future = self.clear_client.call_async(Trigger.Request())
+        deadline = time.monotonic() + timeout
+        while not future.done():
+            if time.monotonic() > deadline:
+                raise ClientError(f'{CLEAR_SERVICE}: no answer within {timeout:.1f} s')
+            time.sleep(0.005)
+        if not future.result().success:
+            raise ClientError(f'{CLEAR_SERVICE}: {future.result().message}')
+
+    def bead(self) -> BeadPoints | None:
+        """The newest bead received, or None."""
+        return None if self._msg is None else bead_from_cloud(self._msg)

@@ -1,0 +1,136 @@
+"""The glue gun on the robot's digital output: switched through the UR driver's ``io_and_status_controller``.
+
+``/io_and_status_controller/set_io`` (ur_msgs/SetIO, FUN_SET_DIGITAL_OUT) is the same call on ur_sim and on a
+real UR driver, so against a real robot this switches the real gun. Switch times follow the controller's
+scaled clock (see switch_timer.py) from its ``controller_state`` messages; every call is logged with the
+robot time it was made at. :meth:`off` switches the gun off and waits for the answer: the executor calls it
+at the end, on failure and on cancel.
+"""
+from __future__ import annotations
+
+import threading
+import time
+from dataclasses import dataclass
+
+from control_msgs.msg import JointTrajectoryControllerState
+from rclpy.node import Node
+from rclpy.qos import QoSProfile
+from ur_msgs.msg import IOStates
+from ur_msgs.srv import SetIO
+
+from ur_glue_planner.errors import ClientError
+from ur_glue_planner.execution.switch_timer import ScaledClock, SwitchEvent, SwitchSequence
+
+SET_IO = '/io_and_status_controller/set_io'
+IO_STATES = '/io_and_status_controller/io_states'
+
+
+@dataclass(frozen=True)
+class OutputChange:
+    """The output as the robot reported it on io_states: its new state, seen at robot time [s] (the newest
+    controller_state stamp then, within a cycle or two) and at trajectory time [s] (None outside a bead)."""
+
+    pin: int
+    state: bool
+    robot_time: float
+    trajectory_time: float | None
+
+
+@dataclass(frozen=True)
+class SwitchRecord:
+    """A set_io call made: the event, the robot time [s] and the trajectory time [s] it was made at."""
+
+    event: SwitchEvent
+    robot_time: float
+    trajectory_time: float
+    success: bool | None
+
+
+class DispenserIO:
+    """Switches one digital output on a trajectory's clock.
+
+    Args:
+        node: The client's node (its executor spins elsewhere).
+        controller_state: Topic of the trajectory controller's state (stamp and speed_scaling_factor).
+    The controller's period is taken from the stamps of consecutive state messages: an event is due half a
+    period early, so that the call lands in the cycle nearest to its time (within half a period: 1 ms at
+    500 Hz, 4 ms at 125 Hz, plus the service's delivery).
+    """
+
+    def __init__(self, node: Node, controller_state: str) -> None:
+        self.node = node
+        self.client = node.create_client(SetIO, SET_IO)
+        self._lock = threading.Lock()
+        self._clock: ScaledClock | None = None
+        self._sequence: SwitchSequence | None = None
+        self._last_stamp: float | None = None
+        self.records: list[SwitchRecord] = []
+        self.changes: list[OutputChange] = []
+        self._watched: dict[int, bool] = {}
+        self._pending: list[tuple[SwitchEvent, float, float, object]] = []
+        node.create_subscription(JointTrajectoryControllerState, controller_state, self._on_state,
+                                 QoSProfile(depth=20))
+        node.create_subscription(IOStates, IO_STATES, self._on_io, QoSProfile(depth=20))
+
+    def available(self, timeout: float = 2.0) -> bool:
+        """Whether the set_io service answers (the io_and_status_controller is running)."""
+        return self.client.wait_for_service(timeout_sec=timeout)
+
+    def arm(self, events: list[SwitchEvent], start: float) -> None:
+        """Switch ``events`` on the clock of a goal that starts at robot time ``start`` [s]."""
+        with self._lock:
+            self._clock = ScaledClock(start)
+            self._sequence = SwitchSequence(events)
+            self.changes, self.records, self._pending = [], [], []
+            for e in events:
+                self._watched.setdefault(e.pin, False)
+
+    def disarm(self) -> list[SwitchEvent]:
+        """Stop switching; return the events that did not happen."""
+        with self._lock:
+            left = self._sequence.pending if self._sequence is not None else []
+            self._clock = self._sequence = None
+            return left
+
+    def _on_state(self, msg: JointTrajectoryControllerState) -> None:
+        stamp = msg.header.stamp.sec + msg.header.stamp.nanosec * 1e-9
+        with self._lock:
+            last, self._last_stamp = self._last_stamp, stamp
+            if self._clock is None:
+                return
+            if last is not None and 0.0 < stamp - last < 0.1:
+                self._sequence.half_period = 0.5 * (stamp - last)
+            t = self._clock.update(stamp, msg.speed_scaling_factor)
+            due = self._sequence.due(t)
+        for event in due:
+            future = self.client.call_async(SetIO.Request(fun=SetIO.Request.FUN_SET_DIGITAL_OUT, pin=event.pin,
+                                                          state=1.0 if event.state else 0.0))
+            self._pending.append((event, stamp, t, future))
+
+    def _on_io(self, msg: IOStates) -> None:
+        with self._lock:
+            for pin, known in list(self._watched.items()):
+                if pin < len(msg.digital_out_states) and bool(msg.digital_out_states[pin].state) != known:
+                    self._watched[pin] = not known
+                    stamp = self._last_stamp if self._last_stamp is not None else float('nan')
+                    self.changes.append(OutputChange(pin, not known, stamp,
+                                                     self._clock.now if self._clock is not None else None))
+
+    def collect(self) -> list[SwitchRecord]:
+        """Records of every call so far (answers that arrived are filled in)."""
+        for event, stamp, t, future in self._pending:
+            ok = future.result().success if future.done() and future.result() is not None else None
+            self.records.append(SwitchRecord(event, stamp, t, ok))
+        self._pending = []
+        return list(self.records)
+
+    def off(self, pin: int, timeout: float = 5.0) -> bool:
+        """Switch ``pin`` off now and wait for the answer (any armed events are dropped first)."""
+        self.disarm()
+        future = self.client.call_async(SetIO.Request(fun=SetIO.Request.FUN_SET_DIGITAL_OUT, pin=pin, state=0.0))
+        deadline = time.monotonic() + timeout
+        while not future.done():
+            if time.monotonic() > deadline:
+                raise ClientError(f'{SET_IO}: no answer to switching pin {pin} off within {timeout:.1f} s')
+            time.sleep(0.005)
+        return bool(future.result().success)
