@@ -209,12 +209,7 @@ def yaml_params(path) -> dict:
     (``dispenser: {pin: 16}`` -> ``dispenser.pin``), as ``--params-file`` gives them to the node."""
     import yaml
 
-    def flat(d: dict, prefix: str = '') -> dict:
-        out = {}
-        for k, v in d.items():
-            out.update(flat(v, f'{prefix}{k}.') if isinstance(v, dict) else {f'{prefix}{k}': v})
-        return out
-    return flat(yaml.safe_load(Path(path).read_text())['/**']['ros__parameters'])
+    return _flatten(yaml.safe_load(Path(path).read_text())['/**']['ros__parameters'])
 
 
 @contextmanager
