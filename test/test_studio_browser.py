@@ -191,6 +191,8 @@ def test_run_on_ur_sim_succeeds_with_the_robot_live_in_the_page(studio, page, si
     assert studio.run_result.error_code == 0
     wait_until(lambda: page.get_by_text('Run succeeded').count() > 0, 'the page to report success')
     assert len(studio._trail) > 200  # the executed tip path, drawn as it went
+    # The glue gun was switched and the simulated bead, about 2.2 m at one point per mm, is shown on the glass.
+    wait_until(lambda: studio.bead_points_drawn > 1500, 'the bead in the page')
     screenshot(page, '5_run')
 
 

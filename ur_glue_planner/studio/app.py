@@ -90,6 +90,9 @@ class Studio:
         self._trail_pieces: list = []
         self._gizmo = None
         self.live_updates = 0
+        self._bead_count = 0
+        self._bead_cloud = None
+        self.bead_points_drawn = 0  # deposit points of the simulated bead shown in the page
         self._build_gui(job_path is not None)
         self.server.on_client_connect(self._on_connect)
         if job_path is not None:
@@ -524,9 +527,27 @@ class Studio:
         self._live_stamp = state.stamp
         self._live_view.show(state.names, state.q)
         self.live_updates += 1
+        self._draw_bead()
         tip = self._live_view.robot.frame_position(self._tip_frame, state.names, state.q)
         if tip is not None and (not self._trail or np.linalg.norm(tip - self._trail[-1]) > 5e-4):
             self._trail.append(tip)
+
+    def _draw_bead(self) -> None:
+        """The simulated bead as it grows: one point per deposit, amber, sized to the bead's mean width."""
+        count, bead = self.live.bead()
+        if count == self._bead_count or bead is None:
+            return
+        self._bead_count = count
+        if len(bead.points) == 0:
+            if self._bead_cloud is not None:
+                self._bead_cloud.remove()
+                self._bead_cloud = None
+            return
+        colors = np.tile(np.array([[240, 160, 20]], dtype=np.uint8), (len(bead.points), 1))
+        self._bead_cloud = self.server.scene.add_point_cloud(
+            '/bead', points=bead.points.astype(np.float32), colors=colors,
+            point_size=float(np.mean(bead.widths)), point_shape='circle')
+        self.bead_points_drawn = len(bead.points)
 
     def _live_tip_frame(self) -> str:
         if self.sjob is not None:

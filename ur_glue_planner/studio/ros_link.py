@@ -21,7 +21,9 @@ from sensor_msgs.msg import JointState
 from std_msgs.msg import String
 
 from ur_glue_planner.errors import ClientError, PlanningError
+from ur_glue_planner.execution.bead_listener import BeadListener, BeadPoints
 from ur_glue_planner.execution.client import URClient
+from ur_glue_planner.execution.dispenser_io import DispenserIO
 from ur_glue_planner.execution.run import Interrupted, describe, execute
 from ur_glue_planner.job import GlueJob
 from ur_glue_planner.motion.plan import GluePlan, plan_job
@@ -70,6 +72,8 @@ class LiveRobot:
                                       QoSProfile(depth=10))
         latched = QoSProfile(depth=1, durability=DurabilityPolicy.TRANSIENT_LOCAL)
         self.node.create_subscription(String, f'{self.prefix}/robot_description', self._on_description, latched)
+        # The simulated bead (ur_sim with the dispenser only; a real driver has no such topic).
+        self.bead_listener = BeadListener(self.node)
         self._executor = SingleThreadedExecutor(context=context)
         self._executor.add_node(self.node)
         self._thread = threading.Thread(target=self._executor.spin, daemon=True)
@@ -96,6 +100,10 @@ class LiveRobot:
         """The robot's URDF, or None before it arrived."""
         with self._lock:
             return self._urdf
+
+    def bead(self) -> tuple[int, BeadPoints | None]:
+        """(how many bead messages arrived, the newest bead in the planner's world frame or None)."""
+        return self.bead_listener.received, self.bead_listener.bead()
 
     # ---- running a plan --------------------------------------------------------------------------------------
     @property
@@ -125,7 +133,14 @@ class LiveRobot:
             try:
                 plan = plan_job(job, ur.joint_state().q)
                 log(f'planned from the current state: total {plan.summary.total_duration:.2f} s')
-                outcome, _ = execute(ur, plan, self._stop, log=log, on_progress=on_progress)
+                # The glue gun is switched as by the planner node, where the driver has set_io; the simulated
+                # bead is cleared first where ur_sim has one.
+                prefix = '/' + namespace.strip('/') if namespace.strip('/') else ''
+                gun = DispenserIO(ur.node, f'{prefix}/{controller_name}/controller_state')
+                gun = gun if gun.available(timeout=2.0) else None
+                bead = BeadListener(ur.node) if gun is not None else None
+                bead = bead if bead is not None and bead.available(timeout=1.0) else None
+                outcome, _ = execute(ur, plan, self._stop, log=log, on_progress=on_progress, gun=gun, bead=bead)
                 text = describe(outcome)
                 on_done(RunResult(outcome.succeeded, outcome.error_code, text), plan)
             except Interrupted as exc:
