@@ -91,7 +91,25 @@ class SimHarness:
         self._recorder: Node | None = None
         self._listeners: list = []
         wait_for(lambda: self.action.server_is_ready(), what='the FollowJointTrajectory server')
+        self._warm_up_action()
         wait_for(lambda: self.topic.get_subscription_count() > 0, what='the joint_trajectory subscriber')
+
+    def _warm_up_action(self) -> None:
+        """Send goals without points (rejected, no side effect) until one is answered.
+
+        server_is_ready() says the client sees the server; the server may not yet see the client's response
+        reader, and a response sent before that is lost (DDS discovery). One answered request proves the path.
+        """
+        deadline = time.monotonic() + TIMEOUT
+        while True:
+            future = self.action.send_goal_async(FollowJointTrajectory.Goal())
+            answered = time.monotonic() + 2.0
+            while not future.done() and time.monotonic() < answered:
+                time.sleep(0.005)
+            if future.done():
+                return
+            if time.monotonic() > deadline:
+                raise TimeoutError('the FollowJointTrajectory server never answered a goal')
 
     def _on_js(self, msg: JointState) -> None:
         rec = self.recording
