@@ -4,6 +4,8 @@ from __future__ import annotations
 import shutil
 import socket
 import time
+from collections.abc import Iterator
+from contextlib import contextmanager
 from pathlib import Path
 
 import numpy as np
@@ -26,6 +28,18 @@ def chromium_path() -> str:
                                '`sudo apt-get install chromium`')
         return found
     return CHROMIUM
+
+
+@contextmanager
+def launched_chromium() -> Iterator:
+    """Debian's chromium, headless, driven by Playwright for the block (it cannot download browsers here)."""
+    from playwright.sync_api import sync_playwright
+    with sync_playwright() as pw:
+        browser = pw.chromium.launch(executable_path=chromium_path(), args=CHROMIUM_ARGS)
+        try:
+            yield browser
+        finally:
+            browser.close()
 
 
 def wait_until(condition, what: str, timeout: float = TIMEOUT, poll: float = 0.02):

@@ -11,7 +11,7 @@ matplotlib.use('Agg')
 import matplotlib.pyplot as plt  # noqa: E402
 import numpy as np  # noqa: E402
 import pytest  # noqa: E402
-from studio_browser import CHROMIUM_ARGS, chromium_path  # noqa: E402
+from studio_browser import launched_chromium  # noqa: E402
 
 from ur_glue_planner.execution.bead_listener import BeadPoints  # noqa: E402
 from ur_glue_planner.report.bead_metrics import bead_quality  # noqa: E402
@@ -71,18 +71,13 @@ def test_video_is_h264_at_30_fps_with_every_frame(report_dir):
 
 def test_page_loads_with_a_playable_video_and_no_broken_image(report_dir):
     out = report_dir[0]
-    from playwright.sync_api import sync_playwright
-    with sync_playwright() as pw:
-        browser = pw.chromium.launch(executable_path=chromium_path(), args=CHROMIUM_ARGS)
-        try:
-            page = browser.new_page()
-            page.goto((out / 'index.html').as_uri())
-            page.wait_for_function("document.querySelector('#run-video').readyState >= 1", timeout=30_000)
-            duration = page.evaluate("document.querySelector('#run-video').duration")
-            assert duration == pytest.approx(31 / 30, abs=0.05)
-            page.wait_for_function("[...document.images].every(i => i.complete)", timeout=30_000)
-            broken = page.evaluate("[...document.images].filter(i => i.naturalWidth === 0).map(i => i.src)")
-            assert page.evaluate("document.images.length") == 1 and broken == []
-            assert 'Bead targets' in page.content()
-        finally:
-            browser.close()
+    with launched_chromium() as browser:
+        page = browser.new_page()
+        page.goto((out / 'index.html').as_uri())
+        page.wait_for_function("document.querySelector('#run-video').readyState >= 1", timeout=30_000)
+        duration = page.evaluate("document.querySelector('#run-video').duration")
+        assert duration == pytest.approx(31 / 30, abs=0.05)
+        page.wait_for_function("[...document.images].every(i => i.complete)", timeout=30_000)
+        broken = page.evaluate("[...document.images].filter(i => i.naturalWidth === 0).map(i => i.src)")
+        assert page.evaluate("document.images.length") == 1 and broken == []
+        assert 'Bead targets' in page.content()

@@ -16,10 +16,9 @@ import pytest
 import yaml
 from sim_harness import running_sim
 from studio_browser import (
-    CHROMIUM_ARGS,
     VIEWPORT,
-    chromium_path,
     free_port,
+    launched_chromium,
     open_page,
     pixel_ray,
     project,
@@ -208,9 +207,5 @@ def test_stop_cancels_the_running_goal(studio, page, sim):
 
 @pytest.fixture(scope='module')
 def browser():
-    from playwright.sync_api import sync_playwright
-    pw = sync_playwright().start()
-    b = pw.chromium.launch(executable_path=chromium_path(), args=CHROMIUM_ARGS)
-    yield b
-    b.close()
-    pw.stop()
+    with launched_chromium() as b:
+        yield b

@@ -16,9 +16,8 @@ import numpy as np
 import pytest
 from ament_index_python.packages import get_package_prefix
 from studio_browser import (
-    CHROMIUM_ARGS,
-    chromium_path,
     free_port,
+    launched_chromium,
     open_page,
     pump_until,
     screenshot,
@@ -33,12 +32,8 @@ from ur_glue_planner.studio.ros_link import LiveRobot
 
 @pytest.fixture(scope='module')
 def browser():
-    from playwright.sync_api import sync_playwright
-    pw = sync_playwright().start()
-    b = pw.chromium.launch(executable_path=chromium_path(), args=CHROMIUM_ARGS)
-    yield b
-    b.close()
-    pw.stop()
+    with launched_chromium() as b:
+        yield b
 
 
 def _ur_sim_process() -> subprocess.Popen:
