@@ -107,10 +107,17 @@ def run(node: Node, gun_pin: int = 16) -> dict:
     goal.trajectory.points = [JointTrajectoryPoint(positions=moved, time_from_start=Duration(sec=2)),
                               JointTrajectoryPoint(positions=q0, time_from_start=Duration(sec=4))]
     robot.wait('the trajectory action server', robot.action.server_is_ready)
-    sent = robot.action.send_goal_async(goal)
-    robot.wait('the goal response', sent.done)
-    if not sent.result().accepted:
-        raise RuntimeError('the trajectory goal was rejected')
+    # The driver's controller_stopper activates the trajectory controller again just after the program plays;
+    # a goal sent in that moment is rejected, so it is sent again for a little while.
+    deadline = time.monotonic() + 2.0
+    while True:
+        sent = robot.action.send_goal_async(goal)
+        robot.wait('the goal response', sent.done)
+        if sent.result().accepted:
+            break
+        if time.monotonic() > deadline:
+            raise RuntimeError('the trajectory goal was rejected')
+        robot.executor.spin_once(timeout_sec=0.1)
     result = sent.result().get_result_async()
     robot.wait('the trajectory result', result.done)
     error_code = result.result().result.error_code
