@@ -23,8 +23,13 @@ def time_to_sec(t: Time) -> float:
 
 def sec_to_time(t: float) -> Time:
     """[s] -> builtin_interfaces/Time (non-negative)."""
-    ns = max(0, round(t * 1e9))
-    return Time(sec=ns // 1_000_000_000, nanosec=ns % 1_000_000_000)
+    sec, nanosec = time_parts(t)
+    return Time(sec=sec, nanosec=nanosec)
+
+
+def time_parts(t: float) -> tuple[int, int]:
+    """[s] -> (sec, nanosec) of a builtin_interfaces/Time (non-negative)."""
+    return divmod(max(0, round(t * 1e9)), 1_000_000_000)
 
 
 def trajectory_command(msg: JointTrajectory) -> TrajectoryCommand:

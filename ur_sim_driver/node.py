@@ -25,6 +25,7 @@ from rclpy.signals import SignalHandlerOptions
 from rosgraph_msgs.msg import Clock
 
 from ur_sim_driver import conversions as conv
+from ur_sim_driver.cdr_template import CdrTemplate
 from ur_sim_driver.controllers.base import Component, Cycle, Host
 from ur_sim_driver.controllers.controller_manager_node import ControllerManagerNode
 from ur_sim_driver.controllers.dispenser import SimulatedDispenser
@@ -169,7 +170,7 @@ class UrSimNode(Node):
         return self._trajectory[self.cfg.controller_name].core
 
     def _init_messages(self) -> None:
-        self._clock_msg = Clock()
+        self._clock_cdr = CdrTemplate(Clock(), stamps=('clock',))  # CDR bytes patched in place (cdr_template.py)
 
     # ---- from the gateway process (its receiving thread) -------------------------------------------------------
     def _on_gateway(self, message: object) -> None:
@@ -265,7 +266,7 @@ class UrSimNode(Node):
                 self._controller_stopper()
             robot_factor, total_factor = self.scaling.factor, self.scaling.total
         self.gateway.set_sim_time(self.sim.time)
-        cycle = Cycle(self._cycle, state.t, conv.sec_to_time(state.t), state, sample, tau, robot_factor,
+        cycle = Cycle(self._cycle, state.t, conv.time_parts(state.t), state, sample, tau, robot_factor,
                       total_factor, tcp_position, tcp_orientation, wrench)
         for component in self.components:
             if component.active:
@@ -297,8 +298,7 @@ class UrSimNode(Node):
         self.controller_manager.program_state_changed(refusal)
 
     def _publish(self, cycle: Cycle) -> None:
-        self._clock_msg.clock = cycle.stamp
-        self._pub_clock.publish(self._clock_msg)
+        self._pub_clock.publish(self._clock_cdr.render((), cycle.stamp_parts))
 
     def shutdown(self) -> None:
         """Stop the simulation loop and the controller's interface process, and wait for both."""

@@ -14,6 +14,7 @@ from __future__ import annotations
 
 import threading
 from dataclasses import dataclass
+from functools import cached_property
 from typing import TYPE_CHECKING
 
 import numpy as np
@@ -37,7 +38,7 @@ class Cycle:
     Attributes:
         index: cycle counter since start.
         t: simulated time at the start of the cycle [s] (the time of `state`).
-        stamp: `t` as a builtin_interfaces/Time (shared: do not modify).
+        stamp_parts: `t` as (sec, nanosec), as builtin_interfaces/Time splits it.
         state: joint state measured at the start of the cycle.
         reference: the trajectory controller's reference for this cycle.
         effort: (n,) torques applied during the cycle [N m].
@@ -51,7 +52,7 @@ class Cycle:
 
     index: int
     t: float
-    stamp: Time
+    stamp_parts: tuple[int, int]
     state: ArmState
     reference: TrajectorySample
     effort: np.ndarray
@@ -60,6 +61,12 @@ class Cycle:
     tcp_position: np.ndarray
     tcp_orientation: np.ndarray
     wrench: np.ndarray
+
+    @cached_property
+    def stamp(self) -> Time:
+        """`t` as a builtin_interfaces/Time, made when first asked for (shared: do not modify)."""
+        sec, nanosec = self.stamp_parts
+        return Time(sec=sec, nanosec=nanosec)
 
 
 @dataclass

@@ -4,6 +4,7 @@ from __future__ import annotations
 from geometry_msgs.msg import WrenchStamped
 from rclpy.node import Node
 
+from ur_sim_driver.cdr_template import CdrTemplate
 from ur_sim_driver.controllers.base import Component, Cycle, Host
 
 
@@ -20,12 +21,11 @@ class ForceTorqueSensorBroadcaster(Component):
 
     def on_configure(self, host: Host, node: Node) -> None:
         self._pub = node.create_publisher(WrenchStamped, host.cfg.prefixed(f'{self.name}/wrench'), 10)
-        self._msg = WrenchStamped()
-        self._msg.header.frame_id = f'{host.cfg.tf_prefix}tool0_controller'
+        msg = WrenchStamped()
+        msg.header.frame_id = f'{host.cfg.tf_prefix}tool0_controller'
+        # Published as CDR bytes patched in place (cdr_template.py).
+        self._cdr = CdrTemplate(msg, stamps=('header.stamp',),
+                                floats=tuple(f'wrench.{v}.{a}' for v in ('force', 'torque') for a in 'xyz'))
 
     def update(self, cycle: Cycle) -> None:
-        msg = self._msg
-        msg.header.stamp = cycle.stamp
-        f, t = msg.wrench.force, msg.wrench.torque
-        f.x, f.y, f.z, t.x, t.y, t.z = cycle.wrench.tolist()
-        self._pub.publish(msg)
+        self._pub.publish(self._cdr.render(cycle.wrench, cycle.stamp_parts))

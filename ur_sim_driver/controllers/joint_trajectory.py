@@ -27,6 +27,7 @@ from rclpy.node import Node
 
 from ur_sim_driver import conversions as conv
 from ur_sim_driver import result_codes
+from ur_sim_driver.cdr_template import CdrTemplate
 from ur_sim_driver.controllers.base import Cycle, Host
 from ur_sim_driver.controllers.joint_command import JointCommandController
 from ur_sim_driver.errors import TrajectoryError
@@ -44,6 +45,10 @@ UNSCALED_TYPE = 'joint_trajectory_controller/JointTrajectoryController'
 DEACTIVATED = 'Current goal cancelled during deactivate transition.'  # upstream's words; the goal is aborted here
 QUERY_INACTIVE = "Can't sample trajectory. Controller is not active."
 QUERY_NO_TRAJECTORY = 'Currently there is no valid trajectory instance.'
+
+# The arrays of controller_state that update() fills, point by point, in the order it writes them.
+_STATE_FIELDS = (('reference', ('positions', 'velocities', 'accelerations')), ('feedback', ('positions', 'velocities')),
+                 ('error', ('positions', 'velocities')), ('output', ('positions', 'velocities', 'effort')))
 
 
 class JointTrajectoryControllerComponent(JointCommandController):
@@ -86,7 +91,15 @@ class JointTrajectoryControllerComponent(JointCommandController):
         if self.scaled:
             node.create_subscription(SpeedScalingFactor, p(f'{self.name}/speed_scaling_input'),
                                      self._on_speed_scaling, 10, callback_group=MutuallyExclusiveCallbackGroup())
-        self._state_msg = JointTrajectoryControllerState(joint_names=list(self.core.joint_names))
+        # controller_state goes out as CDR bytes patched in place (cdr_template.py), with the arrays the
+        # controller fills: reference (q, qd, qdd), feedback and error (q, qd), output (q, qd, effort).
+        zeros = [0.0] * len(self.core.joint_names)
+        state = JointTrajectoryControllerState(joint_names=list(self.core.joint_names))
+        for point, fields in _STATE_FIELDS:
+            for field in fields:
+                setattr(getattr(state, point), field, zeros)
+        self._state_cdr = CdrTemplate(state, stamps=('header.stamp',), floats=(
+            *(f'{point}.{field}' for point, fields in _STATE_FIELDS for field in fields), 'speed_scaling_factor'))
 
     # ---- lifecycle (simulation loop, under the lock) --------------------------------------------------------------
     def on_activate(self) -> None:
@@ -128,15 +141,12 @@ class JointTrajectoryControllerComponent(JointCommandController):
     # ---- every cycle while active (simulation loop, outside the lock) ---------------------------------------------
     def update(self, cycle: Cycle) -> None:
         state, sample = cycle.state, cycle.reference
-        st = self._state_msg
-        st.header.stamp = cycle.stamp
-        conv.fill_point(st.reference, sample.positions, sample.velocities, sample.accelerations)
-        conv.fill_point(st.feedback, state.q, state.qd)
-        conv.fill_point(st.error, sample.positions - state.q, sample.velocities - state.qd)
-        conv.fill_point(st.output, sample.positions, sample.velocities, effort=cycle.effort)
+        q_ref, qd_ref = sample.positions, sample.velocities
         # The controller reports the factor it advances trajectory time by; the broadcaster the robot's own.
-        st.speed_scaling_factor = cycle.total_factor if self.scaled else 1.0
-        self._pub_state.publish(st)
+        factor = cycle.total_factor if self.scaled else 1.0
+        self._pub_state.publish(self._state_cdr.render(np.concatenate((
+            q_ref, qd_ref, sample.accelerations, state.q, state.qd, q_ref - state.q, qd_ref - state.qd,
+            q_ref, qd_ref, cycle.effort, (factor,))), cycle.stamp_parts))
         token = self._token
         if token is not None and cycle.index % self._feedback_every == 0:
             self._link.send(Feedback(token, state.t, (sample.positions, sample.velocities, sample.accelerations),

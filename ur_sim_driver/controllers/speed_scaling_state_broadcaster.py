@@ -4,6 +4,7 @@ from __future__ import annotations
 from rclpy.node import Node
 from std_msgs.msg import Float64
 
+from ur_sim_driver.cdr_template import CdrTemplate
 from ur_sim_driver.controllers.base import Component, Cycle, Host
 from ur_sim_driver.sim_config import SimConfig
 
@@ -19,8 +20,7 @@ class SpeedScalingStateBroadcaster(Component):
 
     def on_configure(self, host: Host, node: Node) -> None:
         self._pub = node.create_publisher(Float64, host.cfg.prefixed(f'{self.name}/speed_scaling'), 10)
-        self._msg = Float64()
+        self._cdr = CdrTemplate(Float64(), floats=('data',))  # CDR bytes patched in place (cdr_template.py)
 
     def update(self, cycle: Cycle) -> None:
-        self._msg.data = cycle.robot_factor * 100.0
-        self._pub.publish(self._msg)
+        self._pub.publish(self._cdr.render((cycle.robot_factor * 100.0,)))

@@ -1,10 +1,12 @@
 """tcp_pose_broadcaster: the pose of tool0 in the base frame, every control cycle, as a topic and on /tf."""
 from __future__ import annotations
 
+import numpy as np
 from geometry_msgs.msg import PoseStamped, TransformStamped
 from rclpy.node import Node
 from tf2_msgs.msg import TFMessage
 
+from ur_sim_driver.cdr_template import CdrTemplate
 from ur_sim_driver.controllers.base import Component, Cycle, Host
 from ur_sim_driver.sim_config import SimConfig
 
@@ -23,26 +25,21 @@ class TcpPoseBroadcaster(Component):
 
     def on_configure(self, host: Host, node: Node) -> None:
         self._pub = node.create_publisher(PoseStamped, host.cfg.prefixed(f'{self.name}/pose'), 10)
-        self._msg = PoseStamped()
-        self._msg.header.frame_id = f'{host.cfg.tf_prefix}base'
+        base = f'{host.cfg.tf_prefix}base'
+        pose = PoseStamped()
+        pose.header.frame_id = base
+        axes = ('x', 'y', 'z'), ('x', 'y', 'z', 'w')
+        # Both published as CDR bytes patched in place (cdr_template.py), the same 7 values each cycle.
+        self._pose = CdrTemplate(pose, stamps=('header.stamp',), floats=(
+            *(f'pose.position.{a}' for a in axes[0]), *(f'pose.orientation.{a}' for a in axes[1])))
         self._pub_tf = node.create_publisher(TFMessage, '/tf', 100)
         tf = TransformStamped(child_frame_id=f'{host.cfg.tf_prefix}tool0_controller')
-        tf.header.frame_id = self._msg.header.frame_id
-        self._tf_msg = TFMessage(transforms=[tf])
-        self._tf = self._tf_msg.transforms[0]
+        tf.header.frame_id = base
+        self._tf = CdrTemplate(TFMessage(transforms=[tf]), stamps=('transforms[0].header.stamp',), floats=(
+            *(f'transforms[0].transform.translation.{a}' for a in axes[0]),
+            *(f'transforms[0].transform.rotation.{a}' for a in axes[1])))
 
     def update(self, cycle: Cycle) -> None:
-        msg = self._msg
-        msg.header.stamp = cycle.stamp
-        x, y, z = cycle.tcp_position.tolist()
-        qx, qy, qz, qw = cycle.tcp_orientation.tolist()
-        p, o = msg.pose.position, msg.pose.orientation
-        p.x, p.y, p.z = x, y, z
-        o.x, o.y, o.z, o.w = qx, qy, qz, qw
-        self._pub.publish(msg)
-        tf = self._tf
-        tf.header.stamp = cycle.stamp
-        t, r = tf.transform.translation, tf.transform.rotation
-        t.x, t.y, t.z = x, y, z
-        r.x, r.y, r.z, r.w = qx, qy, qz, qw
-        self._pub_tf.publish(self._tf_msg)
+        values = np.concatenate((cycle.tcp_position, cycle.tcp_orientation))
+        self._pub.publish(self._pose.render(values, cycle.stamp_parts))
+        self._pub_tf.publish(self._tf.render(values, cycle.stamp_parts))

@@ -1,0 +1,138 @@
+"""Messages serialized once and patched in place: the per-cycle topics published as CDR bytes.
+
+rclpy converts a message object to its C form on every publish, about 20-30 us for a JointState; publishing
+bytes it already has costs about 3 us. The topics ur_sim publishes every control cycle keep their shape (names,
+frame ids, array lengths) from one cycle to the next and only their stamps and float64 values change, so each is
+serialized once by rclpy itself, the byte offsets of the changing fields are found, and every cycle writes the new
+values into those bytes. What goes on the wire decodes to exactly the message rclpy would have serialized
+(``test_cdr_template`` compares them for random values; only CDR's alignment padding may differ, which carries
+nothing).
+
+The offsets are found by serializing the prototype with a distinct sentinel in every changing field and searching
+the bytes for it (a sentinel must occur exactly once). In CDR every float64 sits 8-aligned counted from the end of
+the 4-byte encapsulation header, and every 32-bit integer 4-aligned, so one float64 view (from byte 4) and one
+uint32 view (from byte 0) of the buffer reach all of them: a cycle's patch is two fancy-index assignments.
+"""
+from __future__ import annotations
+
+import random
+import re
+import struct
+from collections.abc import Sequence
+
+import numpy as np
+from rclpy.serialization import serialize_message
+
+from ur_sim_driver.errors import UrSimError
+
+_HEADER = 4  # CDR encapsulation header; alignment counts from its end
+_STEP = re.compile(r'([A-Za-z_]\w*)(?:\[(\d+)\])?$')
+
+
+def _resolve(msg: object, path: str) -> tuple[object, str]:
+    """(object, attribute) named by a dotted path such as 'transforms[0].header.stamp'."""
+    *parents, leaf = path.split('.')
+    obj = msg
+    for step in parents:
+        match = _STEP.match(step)
+        if match is None:
+            raise UrSimError(f'bad field path {path!r} at {step!r}')
+        try:
+            obj = getattr(obj, match.group(1))
+            if match.group(2) is not None:
+                obj = obj[int(match.group(2))]
+        except (AttributeError, IndexError):
+            raise UrSimError(f'{type(msg).__name__} has no field {path!r}') from None
+    if not hasattr(obj, leaf):
+        raise UrSimError(f'{type(msg).__name__} has no field {path!r}')
+    return obj, leaf
+
+
+class CdrTemplate:
+    """One message's serialized bytes with writable stamps and float64 fields.
+
+    Args:
+        prototype: the message as published, with every array at its published length (its other fields, e.g.
+            names and frame ids, are serialized as they are).
+        stamps: paths of builtin_interfaces/Time fields, e.g. 'header.stamp'.
+        floats: paths of float64 fields or float64[] fields, e.g. 'position' or 'pose.position.x'. `render`
+            takes their values flattened in this order.
+
+    Raises:
+        UrSimError: a path names no field, or a field's sentinel could not be located once.
+    """
+
+    def __init__(self, prototype: object, stamps: Sequence[str] = (), floats: Sequence[str] = ()) -> None:
+        rng = random.Random(0x5EED)
+        slots: list[tuple[object, str, list[float] | float]] = []
+        for path in floats:
+            obj, leaf = _resolve(prototype, path)
+            value = getattr(obj, leaf)
+            if isinstance(value, float):
+                sentinel: list[float] | float = _sentinel_double(rng)
+            else:
+                sentinel = [_sentinel_double(rng) for _ in range(len(value))]
+            slots.append((obj, leaf, sentinel))
+        stamp_slots = []
+        for path in stamps:
+            obj, leaf = _resolve(prototype, path)
+            stamp = getattr(obj, leaf)
+            stamp_slots.append((stamp, rng.randrange(1 << 30, 1 << 31), rng.randrange(1, 999_999_999)))
+        saved = [(obj, leaf, getattr(obj, leaf)) for obj, leaf, _ in slots]
+        saved_stamps = [(s, s.sec, s.nanosec) for s, _, _ in stamp_slots]
+        try:
+            for obj, leaf, sentinel in slots:
+                setattr(obj, leaf, sentinel)
+            for stamp, sec, nanosec in stamp_slots:
+                stamp.sec, stamp.nanosec = sec, nanosec
+            marked = serialize_message(prototype)
+        finally:
+            for obj, leaf, value in saved:
+                setattr(obj, leaf, value)
+            for stamp, sec, nanosec in saved_stamps:
+                stamp.sec, stamp.nanosec = sec, nanosec
+        little = marked[1] == 1
+        order = '<' if little else '>'
+        double_index: list[int] = []
+        for (_, _, sentinel), path in zip(slots, floats):
+            for value in (sentinel if isinstance(sentinel, list) else [sentinel]):
+                offset = _locate(marked, struct.pack(order + 'd', value), path)
+                if (offset - _HEADER) % 8:
+                    raise UrSimError(f'field {path!r} is not 8-aligned in the CDR of {type(prototype).__name__}')
+                double_index.append((offset - _HEADER) // 8)
+        word_index: list[int] = []
+        for (_, sec, nanosec), path in zip(stamp_slots, stamps):
+            offset = _locate(marked, struct.pack(order + 'iI', sec, nanosec), path)
+            word_index += [offset // 4, offset // 4 + 1]
+        self.size = len(double_index)
+        self.stamp_count = len(stamps)
+        self._buffer = bytearray(serialize_message(prototype))
+        self._doubles = np.frombuffer(self._buffer, dtype=order + 'f8', offset=_HEADER,
+                                      count=(len(self._buffer) - _HEADER) // 8)
+        self._words = np.frombuffer(self._buffer, dtype=order + 'u4', count=len(self._buffer) // 4)
+        self._double_index = np.array(double_index, dtype=np.intp)
+        self._word_index = np.array(word_index, dtype=np.intp)
+
+    def render(self, values: np.ndarray | Sequence[float], stamp: tuple[int, int] | None = None) -> bytes:
+        """The message's bytes with `values` (the float fields flattened, in order) and every stamp set to `stamp`
+        (sec, nanosec); a stamp not given keeps its last value."""
+        if self.size:
+            self._doubles[self._double_index] = values
+        if stamp is not None and self.stamp_count:
+            self._words[self._word_index] = stamp * self.stamp_count
+        return bytes(self._buffer)
+
+
+def _sentinel_double(rng: random.Random) -> float:
+    """A finite double with random bits: it occurs nowhere else in a message by chance."""
+    while True:
+        (value,) = struct.unpack('<d', rng.getrandbits(64).to_bytes(8, 'little'))
+        if np.isfinite(value) and value != 0.0:
+            return value
+
+
+def _locate(data: bytes, pattern: bytes, path: str) -> int:
+    first = data.find(pattern)
+    if first < 0 or data.find(pattern, first + 1) >= 0:
+        raise UrSimError(f'field {path!r} could not be located in the serialized message')
+    return first
