@@ -47,7 +47,9 @@ def test_limits_hold_in_freedrive():
     tau = sim.advance_free(sim.state())
     assert tau[5] < -0.9 * p.effort_max[5]
     sim = make()
-    sim.physics.data.qvel[sim.physics._dof[4]] = -(p.v_max[4] + 0.1)
+    dof = sim.physics.model.jnt_dofadr[mujoco.mj_name2id(sim.physics.model, mujoco.mjtObj.mjOBJ_JOINT,
+                                                          sim.physics.joint_names[4])]
+    sim.physics.data.qvel[dof] = -(p.v_max[4] + 0.1)
     mujoco.mj_step1(sim.physics.model, sim.physics.data)
     tau = sim.advance_free(sim.state())
     assert tau[4] > 0.9 * p.effort_max[4]

@@ -161,7 +161,8 @@ class TrajectoryController:
         traj = self._trajectory
         if traj is None:
             raw = self._hold_sample()
-            self.scaling.update(raw.velocities, np.zeros_like(q), self.speed_scaling, period)
+            # Holding, nothing lags: the hold sample's zero velocities serve as the (zero) lag.
+            self.scaling.update(raw.velocities, raw.velocities, self.speed_scaling, period)
             self.stop = self._hold
             sample = raw
         else:
@@ -211,5 +212,5 @@ class TrajectoryController:
         return Outcome(token, code, f'{reason} after goal_time {tol.goal_time:.3f} s')
 
     def _hold_sample(self) -> TrajectorySample:
-        zero = np.zeros_like(self._hold)
-        return TrajectorySample(self._hold.copy(), zero, zero.copy(), 0, True)
+        n = len(self._hold)
+        return TrajectorySample(self._hold.copy(), np.zeros(n), np.zeros(n), 0, True)

@@ -170,7 +170,8 @@ class UrSimNode(Node):
         return self._trajectory[self.cfg.controller_name].core
 
     def _init_messages(self) -> None:
-        self._clock_cdr = CdrTemplate(Clock(), stamps=('clock',))  # CDR bytes patched in place (cdr_template.py)
+        # CDR bytes patched in place (cdr_template.py)
+        self._clock_cdr = CdrTemplate(Clock(), stamps=('clock',), publisher=self._pub_clock)
 
     # ---- from the gateway process (its receiving thread) -------------------------------------------------------
     def _on_gateway(self, message: object) -> None:
@@ -298,7 +299,7 @@ class UrSimNode(Node):
         self.controller_manager.program_state_changed(refusal)
 
     def _publish(self, cycle: Cycle) -> None:
-        self._pub_clock.publish(self._clock_cdr.render((), cycle.stamp_parts))
+        self._clock_cdr.publish((), cycle.stamp_parts)
 
     def shutdown(self) -> None:
         """Stop the simulation loop and the controller's interface process, and wait for both."""

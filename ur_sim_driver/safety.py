@@ -58,6 +58,9 @@ def limit_cause(q: np.ndarray, reference: np.ndarray, q_min: np.ndarray, q_max: 
         q_min, q_max: (n,) position limits [rad].
         joint_names: n names, for the message.
     """
+    # Commands within the limits, the case of every cycle, are ruled out with one comparison.
+    if max(np.maximum(reference - q_max, q_min - reference).tolist()) <= 0.0:
+        return None
     upper = (reference > q_max) & (q >= q_max - LIMIT_MARGIN)
     lower = (reference < q_min) & (q <= q_min + LIMIT_MARGIN)
     hit = np.flatnonzero(upper | lower)

@@ -98,7 +98,7 @@ class Simulator:
         mass, bias = self.physics.dynamics()
         # What the joints can accelerate at now: the type's limit, or less where the effort limit (after
         # gravity and Coriolis torques) allows less. The diagonal of M is the joint's own inertia.
-        reachable = (EFFORT_SHARE * p.effort_max - np.abs(bias)) / np.diag(mass)
+        reachable = (EFFORT_SHARE * p.effort_max - np.abs(bias)) / mass.diagonal()
         reachable = np.maximum(reachable, 0.05 * self.a_max)
         limits = ServoLimits(p.v_max, np.minimum(reachable, ACCEL_SLACK * self.a_max),
                              np.minimum(reachable, BRAKE_CAPABILITY * self.a_max), p.q_min, p.q_max)

@@ -25,7 +25,8 @@ class ForceTorqueSensorBroadcaster(Component):
         msg.header.frame_id = f'{host.cfg.tf_prefix}tool0_controller'
         # Published as CDR bytes patched in place (cdr_template.py).
         self._cdr = CdrTemplate(msg, stamps=('header.stamp',),
-                                floats=tuple(f'wrench.{v}.{a}' for v in ('force', 'torque') for a in 'xyz'))
+                                floats=tuple(f'wrench.{v}.{a}' for v in ('force', 'torque') for a in 'xyz'),
+                                publisher=self._pub)
 
     def update(self, cycle: Cycle) -> None:
-        self._pub.publish(self._cdr.render(cycle.wrench, cycle.stamp_parts))
+        self._cdr.publish(cycle.wrench, cycle.stamp_parts)

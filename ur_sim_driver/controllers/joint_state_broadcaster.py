@@ -27,8 +27,9 @@ class JointStateBroadcaster(Component):
         # Published as CDR bytes patched in place (cdr_template.py): a message object costs ~25 us a publish.
         self._cdr = CdrTemplate(JointState(name=list(host.sim.joint_names), position=[0.0] * n, velocity=[0.0] * n,
                                            effort=[0.0] * n),
-                                stamps=('header.stamp',), floats=('position', 'velocity', 'effort'))
+                                stamps=('header.stamp',), floats=('position', 'velocity', 'effort'),
+                                publisher=self._pub)
 
     def update(self, cycle: Cycle) -> None:
         state = cycle.state
-        self._pub.publish(self._cdr.render(np.concatenate((state.q, state.qd, state.effort)), cycle.stamp_parts))
+        self._cdr.publish(np.concatenate((state.q, state.qd, state.effort)), cycle.stamp_parts)

@@ -99,7 +99,8 @@ class JointTrajectoryControllerComponent(JointCommandController):
             for field in fields:
                 setattr(getattr(state, point), field, zeros)
         self._state_cdr = CdrTemplate(state, stamps=('header.stamp',), floats=(
-            *(f'{point}.{field}' for point, fields in _STATE_FIELDS for field in fields), 'speed_scaling_factor'))
+            *(f'{point}.{field}' for point, fields in _STATE_FIELDS for field in fields), 'speed_scaling_factor'),
+            publisher=self._pub_state)
 
     # ---- lifecycle (simulation loop, under the lock) --------------------------------------------------------------
     def on_activate(self) -> None:
@@ -144,9 +145,9 @@ class JointTrajectoryControllerComponent(JointCommandController):
         q_ref, qd_ref = sample.positions, sample.velocities
         # The controller reports the factor it advances trajectory time by; the broadcaster the robot's own.
         factor = cycle.total_factor if self.scaled else 1.0
-        self._pub_state.publish(self._state_cdr.render(np.concatenate((
+        self._state_cdr.publish(np.concatenate((
             q_ref, qd_ref, sample.accelerations, state.q, state.qd, q_ref - state.q, qd_ref - state.qd,
-            q_ref, qd_ref, cycle.effort, (factor,))), cycle.stamp_parts))
+            q_ref, qd_ref, cycle.effort, (factor,))), cycle.stamp_parts)
         token = self._token
         if token is not None and cycle.index % self._feedback_every == 0:
             self._link.send(Feedback(token, state.t, (sample.positions, sample.velocities, sample.accelerations),

@@ -20,7 +20,8 @@ class SpeedScalingStateBroadcaster(Component):
 
     def on_configure(self, host: Host, node: Node) -> None:
         self._pub = node.create_publisher(Float64, host.cfg.prefixed(f'{self.name}/speed_scaling'), 10)
-        self._cdr = CdrTemplate(Float64(), floats=('data',))  # CDR bytes patched in place (cdr_template.py)
+        # CDR bytes patched in place (cdr_template.py)
+        self._cdr = CdrTemplate(Float64(), floats=('data',), publisher=self._pub)
 
     def update(self, cycle: Cycle) -> None:
-        self._pub.publish(self._cdr.render((cycle.robot_factor * 100.0,)))
+        self._cdr.publish((cycle.robot_factor * 100.0,))

@@ -31,15 +31,15 @@ class TcpPoseBroadcaster(Component):
         axes = ('x', 'y', 'z'), ('x', 'y', 'z', 'w')
         # Both published as CDR bytes patched in place (cdr_template.py), the same 7 values each cycle.
         self._pose = CdrTemplate(pose, stamps=('header.stamp',), floats=(
-            *(f'pose.position.{a}' for a in axes[0]), *(f'pose.orientation.{a}' for a in axes[1])))
+            *(f'pose.position.{a}' for a in axes[0]), *(f'pose.orientation.{a}' for a in axes[1])), publisher=self._pub)
         self._pub_tf = node.create_publisher(TFMessage, '/tf', 100)
         tf = TransformStamped(child_frame_id=f'{host.cfg.tf_prefix}tool0_controller')
         tf.header.frame_id = base
         self._tf = CdrTemplate(TFMessage(transforms=[tf]), stamps=('transforms[0].header.stamp',), floats=(
             *(f'transforms[0].transform.translation.{a}' for a in axes[0]),
-            *(f'transforms[0].transform.rotation.{a}' for a in axes[1])))
+            *(f'transforms[0].transform.rotation.{a}' for a in axes[1])), publisher=self._pub_tf)
 
     def update(self, cycle: Cycle) -> None:
         values = np.concatenate((cycle.tcp_position, cycle.tcp_orientation))
-        self._pub.publish(self._pose.render(values, cycle.stamp_parts))
-        self._pub_tf.publish(self._tf.render(values, cycle.stamp_parts))
+        self._pose.publish(values, cycle.stamp_parts)
+        self._tf.publish(values, cycle.stamp_parts)
