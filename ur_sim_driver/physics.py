@@ -28,7 +28,7 @@ class ArmState:
     effort: np.ndarray
 
 
-_XYZW = [1, 2, 3, 0]  # MuJoCo's (w, x, y, z) in ROS's order
+_XYZW = np.array([1, 2, 3, 0])  # MuJoCo's (w, x, y, z) in ROS's order
 
 
 def _as_slice(index: list[int]) -> slice | np.ndarray:
@@ -80,7 +80,7 @@ class ArmPhysics:
         self._mass_index = (self._dof, self._dof) if isinstance(self._dof, slice) else np.ix_(self._dof, self._dof)
         self._payload = lookup(mujoco.mjtObj.mjOBJ_BODY, payload_body, 'body')
         sensors = [lookup(mujoco.mjtObj.mjOBJ_SENSOR, s, 'sensor') for s in ft_sensors]
-        self._ft = np.concatenate([np.arange(m.sensor_adr[s], m.sensor_adr[s] + 3) for s in sensors])
+        self._ft = _as_slice([int(m.sensor_adr[s]) + k for s in sensors for k in range(3)])
         # Per geom, once: which belong to the robot (the subtree of the base body's root, i.e. arm and tool)
         # and the name a contact report uses (the body, or the geom for bodies fixed to the world).
         root = int(m.body_rootid[self._base])
@@ -90,6 +90,15 @@ class ArmPhysics:
             else (mujoco.mj_id2name(m, mujoco.mjtObj.mjOBJ_GEOM, g) or f'geom {g}')
             for g, b in enumerate(m.geom_bodyid)]
         self._force6 = np.zeros(6)
+        # MjData's arrays, fetched once: each attribute access builds a new array object (about 0.5 us), and the
+        # loop reads a dozen of them every cycle. The arrays share MjData's memory, which never moves.
+        d = self.data
+        self._d_qpos, self._d_qvel, self._d_ctrl = d.qpos, d.qvel, d.ctrl
+        self._d_actuator_force, self._d_bias, self._d_passive = d.actuator_force, d.qfrc_bias, d.qfrc_passive
+        self._d_sensordata = d.sensordata
+        self._tcp_pos, self._tcp_mat = d.site_xpos[self._tcp], d.site_xmat[self._tcp].reshape(3, 3)
+        self._base_pos, self._base_mat9 = d.xpos[self._base], d.xmat[self._base]
+        self._base_mat = self._base_mat9.reshape(3, 3)
 
     def _actuator_for(self, joint_id: int) -> int:
         m = self.model
@@ -113,26 +122,25 @@ class ArmPhysics:
 
     def state(self) -> ArmState:
         """The arm's measured state now."""
-        d = self.data
-        return ArmState(float(d.time), d.qpos[self._qpos].copy(), d.qvel[self._dof].copy(),
-                        d.actuator_force[self._act].copy())
+        return ArmState(self.data.time, self._d_qpos[self._qpos].copy(), self._d_qvel[self._dof].copy(),
+                        self._d_actuator_force[self._act].copy())
 
     def positions(self) -> np.ndarray:
         """(n,) joint positions now [rad]."""
-        return self.data.qpos[self._qpos].copy()
+        return self._d_qpos[self._qpos].copy()
 
     def dynamics(self) -> tuple[np.ndarray, np.ndarray]:
         """M(q) (n, n) [kg m^2] and h(q, qd) = gravity + Coriolis - passive (n,) [N m] at the current state."""
         mujoco.mj_fullM(self.model, self.data, self._mass)
         dof = self._dof
-        bias = self.data.qfrc_bias[dof] - self.data.qfrc_passive[dof]
+        bias = self._d_bias[dof] - self._d_passive[dof]
         return self._mass[self._mass_index].copy(), bias
 
     def step(self, tau: np.ndarray) -> None:
         """Apply joint torques `tau` (n,) [N m] for one control period (zero-order hold)."""
         # Invariant between calls: mj_step1 has run for the current state, so M, h and the TCP pose
         # read by the caller are those of the state the next torques act on.
-        self.data.ctrl[self._act] = tau
+        self._d_ctrl[self._act] = tau
         for _ in range(self.substeps):
             mujoco.mj_step2(self.model, self.data)
             mujoco.mj_step1(self.model, self.data)
@@ -157,12 +165,12 @@ class ArmPhysics:
 
     def tcp_pose(self) -> tuple[np.ndarray, np.ndarray]:
         """TCP pose in the base frame: position (3,) [m] and quaternion (4,) as (x, y, z, w)."""
-        d = self.data
-        r_base = d.xmat[self._base].reshape(3, 3)
-        p = r_base.T @ (d.site_xpos[self._tcp] - d.xpos[self._base])
-        r = r_base.T @ d.site_xmat[self._tcp].reshape(3, 3)
-        wxyz = np.empty(4)
-        mujoco.mju_mat2Quat(wxyz, r.reshape(9))
+        # MuJoCo's 3-vector and 3x3 routines: a third cheaper than numpy's for arrays this small.
+        offset, p, r, wxyz = np.empty(3), np.empty(3), np.empty(9), np.empty(4)
+        mujoco.mju_sub3(offset, self._tcp_pos, self._base_pos)
+        mujoco.mju_mulMatTVec3(p, self._base_mat9, offset)
+        mujoco.mju_mulMatTMat(r.reshape(3, 3), self._base_mat, self._tcp_mat)
+        mujoco.mju_mat2Quat(wxyz, r)
         return p, wxyz[_XYZW]
 
     def wrench(self) -> np.ndarray:
@@ -172,7 +180,7 @@ class ArmPhysics:
         MuJoCo's force and torque sensors give the opposite: what the parent (the arm) exerts on the
         sensor's body and its subtree. Weight, contacts and the subtree's inertia all appear in it.
         """
-        return -self.data.sensordata[self._ft]
+        return -self._d_sensordata[self._ft]
 
     def body_id(self, name: str) -> int | None:
         """The MuJoCo id of body `name`, or None when the model has no such body."""

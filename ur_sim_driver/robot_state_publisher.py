@@ -9,6 +9,7 @@ from __future__ import annotations
 
 import math
 
+import numpy as np
 from geometry_msgs.msg import TransformStamped
 from rclpy.node import Node
 from rclpy.qos import DurabilityPolicy, QoSProfile
@@ -16,6 +17,7 @@ from std_msgs.msg import String
 from tf2_msgs.msg import TFMessage
 
 from ur_sim_driver import conversions as conv
+from ur_sim_driver.cdr_template import CdrTemplate
 from ur_sim_driver.controllers.base import Component, Cycle, Host
 from ur_sim_driver.description.params import matrix_to_quat
 from ur_sim_driver.description.tool import get_tool
@@ -66,10 +68,15 @@ class RobotStatePublisher(Component):
         moving = sorted((j for j in tree if j.index is not None), key=lambda j: j.index)
         # Each moving transform is origin * Rz(q): its rotation is the origin's quaternion times
         # (cos q/2, 0, 0, sin q/2); the translation does not depend on q.
-        self._origin_quat = [tuple(float(v) for v in matrix_to_quat(j.origin.matrix()[:3, :3])) for j in moving]
-        self._index = [j.index for j in moving]
-        self._msg = TFMessage(transforms=[_transform(j) for j in moving])
-        self._moving = list(self._msg.transforms)  # updated in place before each publish
+        # (w, x, y, z) of each origin, as columns (k,) for the vectorised product in update().
+        self._w, self._x, self._y, self._z = np.array([matrix_to_quat(j.origin.matrix()[:3, :3]) for j in moving]).T
+        self._index = np.array([j.index for j in moving], dtype=np.intp)
+        # Published as CDR bytes patched in place (cdr_template.py): the rotations and stamps change.
+        self._tf = CdrTemplate(
+            TFMessage(transforms=[_transform(j) for j in moving]),
+            stamps=tuple(f'transforms[{k}].header.stamp' for k in range(len(moving))),
+            floats=tuple(f'transforms[{k}].transform.rotation.{a}' for k in range(len(moving)) for a in 'xyzw'),
+            publisher=self._pub_tf)
 
         self._pub_description.publish(String(data=sim.urdf))
         self._pub_static.publish(TFMessage(transforms=static))
@@ -79,13 +86,9 @@ class RobotStatePublisher(Component):
         if t < self._next:
             return
         self._next = (math.floor(t / self._period) + 1) * self._period
-        q = cycle.state.q
-        stamp = cycle.stamp
-        for tf, (w1, x1, y1, z1), i in zip(self._moving, self._origin_quat, self._index):
-            half = 0.5 * float(q[i])
-            c, s = math.cos(half), math.sin(half)
-            tf.header.stamp = stamp
-            r = tf.transform.rotation
-            r.x, r.y, r.z, r.w = x1 * c + y1 * s, y1 * c - x1 * s, z1 * c + w1 * s, w1 * c - z1 * s
-        self._pub_tf.publish(self._msg)
+        half = 0.5 * cycle.state.q[self._index]
+        c, s = np.cos(half), np.sin(half)
+        w, x, y, z = self._w, self._x, self._y, self._z
+        rotations = np.stack((x * c + y * s, y * c - x * s, z * c + w * s, w * c - z * s), axis=1)  # (k, 4) xyzw
+        self._tf.publish(rotations.reshape(-1), cycle.stamp_parts)
 
