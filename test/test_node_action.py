@@ -81,8 +81,9 @@ def test_preemption_aborts_the_old_goal(h):
 
 
 def test_cancel_then_hold_measured_position(h):
-    handle = h.send(h.goal([point(h.q + np.array([0.8, 0, 0, 0, 0, 0]), 3.0, ZERO)]))
-    h.wait_sim_time(1.0)
+    # A long goal: the cancel travels through the gateway process while the simulation runs as fast as it can.
+    handle = h.send(h.goal([point(h.q + np.array([0.8, 0, 0, 0, 0, 0]), 20.0, ZERO)]))
+    h.wait_sim_time(4.0)
     cancel = handle.cancel_goal_async()
     wait_for(cancel.done, what='the cancel response')
     status, code, _ = h.result(handle)
