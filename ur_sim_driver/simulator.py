@@ -73,6 +73,10 @@ class Simulator:
         self.gains = PdGains.critically_damped(len(q0), self.control_rate)
         self.servo = JointServo(q0, self.control_rate)
         self.a_max = np.full(len(q0), self.params.a_max)
+        # The servo's limit terms that do not change (advance() runs every control cycle).
+        self._effort_share = EFFORT_SHARE * self.params.effort_max
+        self._a_floor, self._a_follow = 0.05 * self.a_max, ACCEL_SLACK * self.a_max
+        self._a_brake = BRAKE_CAPABILITY * self.a_max
         self.last_setpoint: Setpoint | None = None
         # The robot's IO (immutable; replaced under the simulation lock, read as one snapshot without it).
         self.io = IoBank()
@@ -98,10 +102,9 @@ class Simulator:
         mass, bias = self.physics.dynamics()
         # What the joints can accelerate at now: the type's limit, or less where the effort limit (after
         # gravity and Coriolis torques) allows less. The diagonal of M is the joint's own inertia.
-        reachable = (EFFORT_SHARE * p.effort_max - np.abs(bias)) / mass.diagonal()
-        reachable = np.maximum(reachable, 0.05 * self.a_max)
-        limits = ServoLimits(p.v_max, np.minimum(reachable, ACCEL_SLACK * self.a_max),
-                             np.minimum(reachable, BRAKE_CAPABILITY * self.a_max), p.q_min, p.q_max)
+        reachable = np.maximum((self._effort_share - np.abs(bias)) / mass.diagonal(), self._a_floor)
+        limits = ServoLimits(p.v_max, np.minimum(reachable, self._a_follow), np.minimum(reachable, self._a_brake),
+                             p.q_min, p.q_max)
         sp = self.servo.step(ref.positions, ref.velocities, ref.accelerations, self.control_dt, limits, stop)
         self.last_setpoint = sp
         tau, _ = computed_torque(mass, bias, state.q, state.qd, sp.positions, sp.velocities, sp.accelerations,
