@@ -9,6 +9,8 @@ import os
 import platform
 import signal
 import subprocess
+import sys
+import tempfile
 import threading
 import time
 from pathlib import Path
@@ -127,6 +129,32 @@ def fast_mode_rtf(min_wall: float = 10.0, min_sim: float = 20.0, *args: str) -> 
         node.destroy_node()
         rclpy.try_shutdown(context=ctx)
         sim.stop()
+
+
+def realtime_periods(seconds: float = 60.0, recorder_priority: int = 40) -> dict:
+    """/joint_states in real-time mode as a client sees it over `seconds`: every message's arrival time, recorded
+    by a process of its own (bench/js_recorder.py, under SCHED_FIFO `recorder_priority` where permitted, below
+    ur_sim's loop at its default 50), whose periods give the mean rate, p99 and max."""
+    sim = _SimProcess('-p', 'real_time_factor:=1.0')
+    with tempfile.TemporaryDirectory() as tmp:
+        out = Path(tmp) / 'js.txt'
+        warm_up = 5.0  # [s] discovery and start-up, not counted
+        recorder = subprocess.Popen([sys.executable, '-m', 'bench.js_recorder', str(out), str(seconds + warm_up),
+                                     str(recorder_priority)])
+        try:
+            recorder.wait(timeout=seconds + warm_up + 60.0)
+        finally:
+            sim.stop()
+        rows = np.loadtxt(out, ndmin=2)
+    wall = rows[:, 0]
+    wall = wall[wall >= wall[-1] - seconds]
+    periods = np.diff(wall)
+    return {'window_s': float(wall[-1] - wall[0]), 'messages': int(len(wall)),
+            'mean_rate_hz': float((len(wall) - 1) / (wall[-1] - wall[0])),
+            'period_ms': {'mean': float(periods.mean() * 1e3), 'p50': float(np.percentile(periods, 50) * 1e3),
+                          'p99': float(np.percentile(periods, 99) * 1e3), 'max': float(periods.max() * 1e3)},
+            'gaps_over_5ms': int((periods > 0.005).sum()), 'recorder_priority': recorder_priority,
+            'targets': {'mean_within': '0.5 % of 500 Hz', 'p99_period_ms': 2.5, 'max_period_ms': 5.0}}
 
 
 def realtime_rate_and_latency() -> dict:

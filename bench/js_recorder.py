@@ -1,11 +1,15 @@
-"""`python -m bench.js_recorder OUT SECONDS`: record arrival times of /joint_states in a process of its own.
+"""`python -m bench.js_recorder OUT SECONDS [PRIORITY]`: record arrival times of /joint_states in a process of its own.
 
 The benchmark that sends a 100,000-point trajectory spends seconds building and serializing it while holding
 its GIL; a recorder in that process would see gaps that are its own. This one writes one line per message,
-``monotonic_arrival stamp`` (time.monotonic is one clock for every process on the machine).
+``monotonic_arrival stamp`` (time.monotonic is one clock for every process on the machine). With PRIORITY, it
+receives under SCHED_FIFO at that priority where permitted, as a real-time client would: the gaps it records are
+then the publisher's, not its own waits for a core on a loaded machine.
 """
 from __future__ import annotations
 
+import gc
+import os
 import sys
 import time
 
@@ -17,6 +21,12 @@ from sensor_msgs.msg import JointState
 
 def main() -> int:
     out, seconds = sys.argv[1], float(sys.argv[2])
+    gc.disable()  # a collection pass over the growing list of rows would show as a gap of its own
+    if len(sys.argv) > 3:
+        try:
+            os.sched_setscheduler(0, os.SCHED_FIFO, os.sched_param(int(sys.argv[3])))
+        except OSError as exc:
+            print(f'js_recorder: normal scheduling ({exc.strerror})', file=sys.stderr)
     rclpy.init()
     node = Node('bench_js_recorder')
     rows: list[tuple[float, float]] = []

@@ -1,6 +1,8 @@
 """ur_sim parameters: presets, names on the graph, invalid values stop start-up with a clear message."""
+import os
 import subprocess
 import sys
+import threading
 
 import pytest
 from rclpy.parameter import Parameter
@@ -33,11 +35,47 @@ def test_seed_ur10_preset_names_exist():
     ('speed_scaling_initial_factor', 1.5, "'speed_scaling_initial_factor' = 1.5 is outside"),
     ('tool', 'gripper', "'tool' = 'gripper' is invalid; valid choices: none, dispenser"),
     ('initial_positions', [0.0, 0.0, 4.0, 0.0, 0.0, 0.0], "'initial_positions' [2] = 4.0 rad is outside"),
+    ('thread_priority', 120, "'thread_priority' = 120 must be an integer in [0, 99]"),
 ])
 def test_invalid_parameter_names_parameter_value_and_range(name, value, expected):
     with ros_context() as ctx, pytest.raises(ConfigError) as err:
         UrSimNode(context=ctx, parameter_overrides=[Parameter(name, value=value)], start=False)
     assert expected in str(err.value)
+
+
+def _fifo_permitted() -> bool:
+    """Whether this process may put a thread under SCHED_FIFO (root, or an rtprio limit)."""
+    result = []
+
+    def probe() -> None:
+        try:
+            os.sched_setscheduler(0, os.SCHED_FIFO, os.sched_param(1))
+            result.append(True)
+        except OSError:
+            result.append(False)
+    thread = threading.Thread(target=probe)
+    thread.start()
+    thread.join()
+    return result[0]
+
+
+@pytest.mark.parametrize(('rtf', 'priority'), [(1.0, 10), (0.0, 10), (1.0, 0)])
+def test_real_time_loop_runs_under_sched_fifo_where_permitted(rtf, priority):
+    with ros_context() as ctx:
+        node = UrSimNode(context=ctx, parameter_overrides=[Parameter('real_time_factor', value=rtf),
+                                                           Parameter('thread_priority', value=priority)])
+        try:
+            t0 = node.sim.time
+            wait_for(lambda: node.sim.time > t0 + 0.05, what='the simulation loop running')
+            tid = node._thread.native_id
+            policy, param = os.sched_getscheduler(tid), os.sched_getparam(tid)
+        finally:
+            node.shutdown()
+            node.destroy_node()
+    if rtf > 0 and priority > 0 and _fifo_permitted():
+        assert (policy, param.sched_priority) == (os.SCHED_FIFO, priority)
+    else:  # as fast as possible, disabled, or not permitted: normal scheduling, and the loop runs all the same
+        assert policy == os.SCHED_OTHER
 
 
 def test_console_script_exits_nonzero_with_message_on_bad_parameter():

@@ -12,6 +12,7 @@ publishes on /clock.
 """
 from __future__ import annotations
 
+import gc
 import os
 import signal
 import sys
@@ -209,6 +210,8 @@ class UrSimNode(Node):
         rtf = self.cfg.real_time_factor
         wall_period = dt / rtf if rtf > 0 else 0.0
         next_wall = time.perf_counter()
+        if wall_period > 0.0:
+            self._real_time_priority()
         try:
             while not self._stop.is_set():
                 self.step_once()
@@ -233,6 +236,21 @@ class UrSimNode(Node):
         finally:
             if viewer is not None:
                 viewer.close()
+
+    def _real_time_priority(self) -> None:
+        """Run this (the loop's) thread under SCHED_FIFO at `thread_priority`, as ros2_control_node runs its
+        update thread, so that other processes' load does not delay its cycles. Only in real-time mode: as fast
+        as possible, a FIFO thread that never sleeps would starve the rest of the machine."""
+        priority = self.cfg.thread_priority
+        if priority == 0:
+            return
+        try:
+            os.sched_setscheduler(0, os.SCHED_FIFO, os.sched_param(priority))
+        except OSError as exc:  # not permitted (no CAP_SYS_NICE / rtprio limit): run as before, and say so
+            self.get_logger().warning(
+                f'could not run the simulation loop under SCHED_FIFO priority {priority} ({exc.strerror}); it runs '
+                'at normal priority and its period may jitter under load (allow it with an rtprio limit, e.g. in '
+                '/etc/security/limits.conf, or set thread_priority:=0 to silence this)')
 
     def step_once(self) -> None:
         """One control cycle: pending controller switches, robot state, the active joint controller's reference,
@@ -333,6 +351,9 @@ def main(argv: list[str] | None = None) -> int:
         node = UrSimNode()
         for n in node.nodes():
             executor.add_node(n)
+        # Everything built so far (models, nodes, messages) lives until exit: out of the collector's sight, its
+        # full collections take microseconds instead of milliseconds that the loop thread would wait out.
+        gc.freeze()
         while not stop.is_set() and rclpy.ok():
             executor.spin_once(timeout_sec=0.1)
     except (KeyboardInterrupt, ExternalShutdownException):

@@ -46,6 +46,7 @@ class SimConfig:
     physics_substeps: int = 0
     speed_scaling_initial_factor: float = 1.0
     real_time_factor: float = 1.0
+    thread_priority: int = 50  # SCHED_FIFO priority of the real-time loop, as ros2_control_node's; 0: normal
     tool: str = 'none'
     scene: str = 'empty'
     base_pose: tuple[float, ...] = (0.0, 0.0, 0.0, 0.0, 0.0, 0.0)
@@ -78,6 +79,12 @@ def _number(name: str, value: Any, lo: float, hi: float, *, lo_open: bool = Fals
         bracket = '(' if lo_open else '['
         raise ConfigError(f"parameter '{name}' = {value!r} is outside the allowed range {bracket}{lo}, {hi}]")
     return x
+
+
+def _integer(name: str, value: Any, lo: int, hi: int) -> int:
+    if isinstance(value, bool) or not isinstance(value, int) or not lo <= value <= hi:
+        raise ConfigError(f"parameter '{name}' = {value!r} must be an integer in [{lo}, {hi}]")
+    return value
 
 
 def sim_config_from_params(params: Mapping[str, Any]) -> SimConfig:
@@ -144,6 +151,7 @@ def sim_config_from_params(params: Mapping[str, Any]) -> SimConfig:
                                              get('speed_scaling_initial_factor', d.speed_scaling_initial_factor),
                                              0.0, 1.0),
         real_time_factor=_number('real_time_factor', get('real_time_factor', d.real_time_factor), 0.0, 100.0),
+        thread_priority=_integer('thread_priority', get('thread_priority', d.thread_priority), 0, 99),
         tool=_choice('tool', get('tool', d.tool), TOOLS),
         scene=_choice('scene', get('scene', d.scene), SCENES),
         base_pose=base_pose,
