@@ -19,6 +19,7 @@ from ur_glue_planner.report.glue_report import Executed
 #: ``on_progress(segment name, fraction of its duration done, max joint tracking error [rad])``.
 Progress = Callable[[str, float, float], None]
 
+BEAD_DELIVERY = 1.0  # [s] of wall time allowed for the bead goal to reach the controller before it starts
 RECORD_RATE = 50.0  # [Hz] nominal; the report uses every message received (exact stamps)
 MESSAGES = {
     0: 'bead completed',
@@ -98,7 +99,14 @@ def execute(ur: URClient, plan: GluePlan, stop: threading.Event, log: Callable[[
     try:
         for seg in plan.segments():
             early = max(0.0, -plan.dispense.t_on) if (seg.name == 'bead' and gun is not None) else 0.0
-            t0 = ur.start_time(lead=0.1 + early)
+            if seg.name == 'bead':
+                # The bead's start is fixed in advance (the gun switches on its clock): a stamp ahead, with a
+                # margin for the goal's delivery [s of wall time] that a loaded machine also meets.
+                t0 = start = ur.start_time(lead=0.1 + early, delivery=BEAD_DELIVERY)
+            else:
+                # The moves around it start on arrival: a stamp that a slow delivery put in the past would make
+                # the controller sample the trajectory past its start, a jump that aborts the goal.
+                t0, start = ur.now(), 0.0
             if seg.name == 'bead':
                 recorder = ur.start_recording(RECORD_RATE, t0)
                 bead_start = t0
@@ -111,7 +119,7 @@ def execute(ur: URClient, plan: GluePlan, stop: threading.Event, log: Callable[[
             feedback = _progress(seg.name, t0, seg.duration, log, on_progress)
             goal = ur.follow_trajectory(seg.q, seg.qd, seg.qdd, seg.times, path_tolerance=path_tol,
                                         goal_tolerance=goal_tol, goal_time_tolerance=job.tolerances.goal_time,
-                                        wait=False, start_time=t0, feedback_callback=feedback)
+                                        wait=False, start_time=start, feedback_callback=feedback)
             while not goal.done:
                 if stop.is_set():
                     log(f'\ninterrupted: cancelling the {seg.name} goal')
