@@ -135,6 +135,11 @@ class GluePath:
         kvec = self._evaluate(s)[3]
         return kvec[0] if np.ndim(s) == 0 else kvec
 
+    def derivatives(self, s: np.ndarray | float) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
+        """Positions (M, 3) [m], unit tangents (M, 3) and curvature vectors (M, 3) [1/m] in one evaluation."""
+        pos, tan, _, kvec = self._evaluate(s)
+        return pos, tan, kvec
+
     def quaternion(self, s: np.ndarray | float) -> np.ndarray:
         """Tip orientation as unit quaternions (M, 4), w first; (4,) for a scalar s.
 
