@@ -63,3 +63,11 @@ def test_derivatives_in_one_evaluation_equal_sample_and_curvature_vector(chords,
         np.testing.assert_array_equal(pos, path.sample(x)[0])
         np.testing.assert_array_equal(tan, path.sample(x)[1])
         np.testing.assert_array_equal(kvec, path.curvature_vector(x))
+
+
+def test_position_alone_equals_the_sampled_one(chords):
+    surf = SurfacePath(chords, DEFAULT_WINDSHIELD, 0.003, AXIS)
+    s = np.linspace(0.0, chords.length, 50, endpoint=False)
+    for path, x in ((chords, s), (surf, s), (RunUpPath(surf, 0.05, 0.04), s + 0.02)):
+        np.testing.assert_array_equal(path.position(x), path.sample(x)[0])
+        np.testing.assert_array_equal(path.position(x[7]), path.sample(x[7])[0])

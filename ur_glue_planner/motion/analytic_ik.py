@@ -176,16 +176,14 @@ def nearest_branch(solutions: np.ndarray, q: np.ndarray) -> tuple[int, float]:
 
 
 def follow_branch(solutions: np.ndarray, q_start: np.ndarray) -> np.ndarray:
-    """One branch along a sequence of poses, made continuous: (M, n) [rad] from ``solutions`` (M, n).
+    """Branches along a sequence of poses, made continuous: (M, ..., n) [rad] from ``solutions`` (M, ..., n).
 
-    Each joint is unwrapped along the sequence and shifted by whole turns so that row 0 is
-    within pi of ``q_start``; rows from the first NaN row on stay NaN.
+    Each joint is unwrapped along the sequence (axis 0) and shifted by whole turns so that row 0
+    is within pi of ``q_start`` (broadcast to (..., n)); from a branch's first NaN row on, its
+    rows stay NaN.
     """
     q = np.array(solutions, dtype=float)
-    bad = np.flatnonzero(np.isnan(q).any(axis=1))
-    end = int(bad[0]) if bad.size else len(q)
-    q[end:] = np.nan
-    if end:
-        q[:end] = np.unwrap(q[:end], axis=0)
-        q[:end] += _TWO_PI * np.round((np.asarray(q_start, dtype=float) - q[0]) / _TWO_PI)
-    return q
+    ended = np.logical_or.accumulate(np.isnan(q).any(axis=-1), axis=0)
+    q[ended] = np.nan
+    q = np.unwrap(q, axis=0)  # a NaN row stays NaN and so do the ones after it
+    return q + _TWO_PI * np.round((np.asarray(q_start, dtype=float) - q[0]) / _TWO_PI)

@@ -5,10 +5,11 @@ flipped or not); warm-started IK then stays in the branch it starts in. Not ever
 can follow the whole bead: for the seed's windshield, only the branches with the wrist flipped
 (q5 > 0 in the ROS 2 description) reach the top edge, and IK from the home pose lands in one
 of the others for some start points (the seed's first waypoint). So the planner collects the
-branches at the bead start (IK from the reference pose and from fixed pseudo-random guesses),
-follows each one along the bead on a coarse grid, and keeps the branch that stays continuous
-with the lowest peak joint-speed demand (furthest from singularities); near-ties go to the
-branch nearest to the reference pose.
+branches at the bead start (IK from the reference pose, then for a UR arm its eight closed-form
+solutions, for other kinematics fixed pseudo-random guesses), follows each one along the bead on
+a coarse grid (a UR arm: its closed-form branch, all grid points at once), and keeps the branch
+that stays continuous with the lowest peak joint-speed demand (furthest from singularities);
+near-ties go to the branch nearest to the reference pose.
 """
 
 from __future__ import annotations
@@ -92,17 +93,18 @@ def _grid(path: GluePath, spacing: float) -> tuple[np.ndarray, np.ndarray]:
     n = max(2, math.ceil(path.length / spacing) + 1)
     s = np.linspace(0.0, path.length, n)
     targets = np.zeros((n, 4, 4))
-    targets[:, :3, :3], targets[:, :3, 3], targets[:, 3, 3] = path.orientation(s), path.sample(s)[0], 1.0
+    targets[:, :3, :3], targets[:, :3, 3], targets[:, 3, 3] = path.orientation(s), path.position(s), 1.0
     return s, targets
 
 
-def _follow_closed_form(kin: UrKinematics, s: np.ndarray, solutions: np.ndarray, q_start: np.ndarray,
+def _follow_closed_form(kin: UrKinematics, s: np.ndarray, branches: np.ndarray, q_start: np.ndarray,
                         speed: float, max_jump: float) -> tuple[bool, float, str] | None:
-    """:func:`follow` on the closed-form solutions (n, 8, n_joints) of the grid; None if q_start is in none."""
-    branch, distance = nearest_branch(solutions[0], q_start)
+    """:func:`follow` on the grid's closed-form branches made continuous (n, 8, n_joints)
+    (:func:`~ur_glue_planner.motion.analytic_ik.follow_branch`); None if q_start is on none of them."""
+    branch, distance = nearest_branch(branches[0], q_start)
     if distance > 1e-3:
         return None
-    q = follow_branch(solutions[:, branch], q_start)
+    q = follow_branch(branches[:, branch], q_start)
     ok = np.all((q >= kin.q_min) & (q <= kin.q_max), axis=1)  # NaN (out of reach) is not ok either
     step = np.abs(np.diff(q, axis=0))
     jumps = np.any(step > max_jump, axis=1)
@@ -132,8 +134,9 @@ def follow(path: GluePath, kin: Kinematics, q_start: np.ndarray, speed: float, s
     """
     s, targets = _grid(path, spacing)
     if isinstance(kin, UrKinematics):
-        out = _follow_closed_form(kin, s, kin.analytic.solve(targets), np.asarray(q_start, dtype=float), speed,
-                                  max_jump)
+        solutions = kin.analytic.solve(targets)
+        out = _follow_closed_form(kin, s, follow_branch(solutions, solutions[0]), np.asarray(q_start, dtype=float),
+                                  speed, max_jump)
         if out is not None:
             return out
     q_prev, peak = np.asarray(q_start, dtype=float), 0.0
@@ -177,7 +180,8 @@ def choose_branch(path: GluePath, kin: Kinematics, reference: np.ndarray, speed:
     if isinstance(kin, UrKinematics):  # all branches from one closed-form solve of the grid
         s, targets = _grid(path, _SPACING)
         solutions = kin.analytic.solve(targets)
-        follows = {i: _follow_closed_form(kin, s, solutions, q, speed, _MAX_JUMP) for i, q in enumerate(qs)}
+        branches = follow_branch(solutions, solutions[0])  # all eight, unwrapped once
+        follows = {i: _follow_closed_form(kin, s, branches, q, speed, _MAX_JUMP) for i, q in enumerate(qs)}
     branches = []
     for i, q in enumerate(qs):
         ok, peak, why = follows.get(i) or follow(path, kin, q, speed, _SPACING, _MAX_JUMP)

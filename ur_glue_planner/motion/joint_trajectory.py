@@ -1,8 +1,9 @@
 """The build stage: joint positions, velocities and accelerations along the timed bead.
 
-Per sample k (time t_k, arc length s_k): IK of the path pose, warm-started from the previous
-sample extrapolated with its velocity and acceleration (most samples then already meet
-1e-6 m / 1e-6 rad without a Newton step, the rest after one); then, with the LWA Jacobian J at the solution,
+Per sample k (time t_k, arc length s_k): IK of the path pose by :meth:`Kinematics.ik_path` (for a
+UR arm the closed-form solution in the branch of the first sample, checked and if need be refined
+by Pinocchio; per-sample warm-started Newton for other kinematics), all samples at once; then, with
+the LWA Jacobian J at the solution (batched over the samples),
 
     qd  = J^-1 [t sdot ; w_s sdot]
     qdd = J^-1 ([t sddot + k sdot^2 ; w_s sddot + w_s' sdot^2] - dJ/dt qd)

@@ -86,13 +86,18 @@ def serial_drift(jac: np.ndarray, qd: np.ndarray) -> np.ndarray:
     W_i = sum_{k<=i} qd_k w_k and V_i = sum_{k<=i} qd_k v_k:
     dw_i/dt = W_i x w_i and dv_i/dt = W_i x v_i + w_i x (V_n - V_i).
     """
-    v = np.swapaxes(jac[:, :3, :], 1, 2)  # (M, n, 3)
-    w = np.swapaxes(jac[:, 3:, :], 1, 2)
-    big_w = np.cumsum(w * qd[:, :, None], axis=1)
-    big_v = np.cumsum(v * qd[:, :, None], axis=1)
-    v_dot = np.cross(big_w, v) + np.cross(w, big_v[:, -1:, :] - big_v)
-    w_dot = np.cross(big_w, w)
-    return np.concatenate([np.einsum("mi,mij->mj", qd, v_dot), np.einsum("mi,mij->mj", qd, w_dot)], axis=1)
+    v, w, qd = jac[:, :3], jac[:, 3:], qd[:, None, :]  # (M, 3, n), (M, 3, n), (M, 1, n)
+    big_w = np.cumsum(w * qd, axis=2)
+    big_v = np.cumsum(v * qd, axis=2)
+    v_dot = _cross(big_w, v) + _cross(w, big_v[:, :, -1:] - big_v)
+    w_dot = _cross(big_w, w)
+    return np.concatenate([(v_dot * qd).sum(axis=2), (w_dot * qd).sum(axis=2)], axis=1)
+
+
+def _cross(a: np.ndarray, b: np.ndarray) -> np.ndarray:
+    """Cross products over axis 1 of (M, 3, n) arrays (np.cross wants the vectors last)."""
+    return np.stack([a[:, 1] * b[:, 2] - a[:, 2] * b[:, 1], a[:, 2] * b[:, 0] - a[:, 0] * b[:, 2],
+                     a[:, 0] * b[:, 1] - a[:, 1] * b[:, 0]], axis=1)
 
 
 class Kinematics:
@@ -225,14 +230,16 @@ class Kinematics:
 
     def fk_jacobian_batch(self, q: np.ndarray) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
         """:meth:`fk_jacobian` of many configurations q (M, n): (M, 3) [m], (M, 3, 3), (M, 6, n)."""
-        q = np.asarray(q, dtype=float)
-        m = len(q)
-        pos, rot, jac = np.empty((m, 3)), np.empty((m, 3, 3)), np.empty((m, 6, self.model.nv))
-        model, data, fid = self.model, self.data, self.frame_id
-        for k in range(m):  # one Pinocchio pass per configuration; the rest is vectorised below
-            jac[k] = pin.computeFrameJacobian(model, data, self._full(q[k]), fid, _LWA)
-            placement = data.oMf[fid]
-            pos[k], rot[k] = placement.translation, placement.rotation
+        q = np.asarray(q, dtype=float).reshape(-1, self.n)
+        model, data, fid, frames = self.model, self.data, self.frame_id, self.data.oMf
+        jacs, poses = [], []
+        for qk in q if self._identity else (self._full(x).copy() for x in q):
+            # one Pinocchio pass per configuration (it places the frame too); the rest is vectorised
+            jacs.append(pin.computeFrameJacobian(model, data, qk, fid, _LWA))
+            poses.append(frames[fid].homogeneous)
+        jac = np.array(jacs).reshape(len(q), 6, model.nv)
+        pose = np.array(poses).reshape(len(q), 4, 4)
+        pos, rot = pose[:, :3, 3], pose[:, :3, :3]
         if not self._identity:
             jac = jac[:, :, self._idx_v]
         if self._has_base:

@@ -130,6 +130,11 @@ class GluePath:
             return pos[0], tan[0], float(kappa[0])
         return pos, tan, kappa
 
+    def position(self, s: np.ndarray | float) -> np.ndarray:
+        """Positions (M, 3) [m] at arc length s [m]; (3,) for a scalar s."""
+        pos = self._evaluate(s)[0]
+        return pos[0] if np.ndim(s) == 0 else pos
+
     def curvature_vector(self, s: np.ndarray | float) -> np.ndarray:
         """Curvature vector (M, 3) [1/m] = d(tangent)/ds, towards the arc centre; (3,) if scalar."""
         kvec = self._evaluate(s)[3]

@@ -69,9 +69,13 @@ class SurfacePath:
             s_c = np.clip(s, _H_CURVATURE, self.length - _H_CURVATURE)
         else:
             s_t = s_c = s
-        # every stencil point projected in one call
-        stencil = np.concatenate([s, s_t + _H_TANGENT, s_t - _H_TANGENT, s_c + _H_CURVATURE, s_c, s_c - _H_CURVATURE])
-        pos, t_plus, t_minus, c_plus, c_mid, c_minus = self.position(stencil).reshape(6, len(s), 3)
+        # every stencil point projected in one call (a closed path's curvature stencil is centred on s itself)
+        stencil = [s, s_t + _H_TANGENT, s_t - _H_TANGENT, s_c + _H_CURVATURE, s_c - _H_CURVATURE]
+        if not self.closed:
+            stencil.append(s_c)
+        points = self.position(np.concatenate(stencil)).reshape(len(stencil), len(s), 3)
+        pos, t_plus, t_minus, c_plus, c_minus = points[:5]
+        c_mid = points[5] if not self.closed else pos
         d1 = (t_plus - t_minus) / (2 * _H_TANGENT)
         tan = d1 / np.linalg.norm(d1, axis=1, keepdims=True)
         d2 = (c_plus - 2 * c_mid + c_minus) / _H_CURVATURE ** 2
