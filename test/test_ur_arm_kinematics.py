@@ -113,3 +113,18 @@ def test_all_solutions_of_a_pose(kin):
         np.testing.assert_allclose(kin.fk(q), target, atol=1e-9)
     gaps = [np.abs(a - b).max() for i, a in enumerate(valid) for b in valid[:i]]
     assert min(gaps) > 0.1  # eight different arm configurations
+
+
+def test_a_moved_prefixed_arm_solves_in_its_world_frame():
+    base = np.eye(4)
+    base[:3, 3] = (0.0, 0.0, 1.0)  # seed 2's UR10 stands 1 m up
+    kin = ur_kinematics("ur10", None, frame="ee_link", base_pose=base, tf_prefix="ur10_")
+    newton = Kinematics(build_urdf(load_ur_params("ur10"), tf_prefix="ur10_"), joint_names("ur10_"), "ur10_ee_link",
+                        base_pose=base)
+    assert isinstance(kin, UrKinematics)
+    q = np.array([-0.38, 0.98, -2.0, 2.22, 0.86, 1.33]) + np.linspace(0.0, 0.2, 25)[:, None]
+    targets = np.array([newton.fk(x) for x in q])
+    fast, slow = kin.ik_path(targets, q[0] + 0.05), newton.ik_path(targets, q[0] + 0.05)
+    assert fast.failed is None and slow.failed is None
+    np.testing.assert_allclose(fast.q, q, atol=SAME)
+    np.testing.assert_allclose(slow.q, q, atol=SAME)

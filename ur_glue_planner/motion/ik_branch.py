@@ -53,13 +53,11 @@ class Branch:
 
 def _near(q: np.ndarray, reference: np.ndarray, q_min: np.ndarray, q_max: np.ndarray) -> np.ndarray:
     """q with each joint shifted by whole turns towards the reference, staying within limits."""
-    out = q.copy()
-    for j in range(len(q)):
-        cands = q[j] + _TWO_PI * np.arange(-2, 3)
-        cands = cands[(cands >= q_min[j]) & (cands <= q_max[j])]
-        if cands.size:
-            out[j] = cands[np.argmin(np.abs(cands - reference[j]))]
-    return out
+    cands = q[:, None] + _TWO_PI * np.arange(-2, 3)  # (n, 5)
+    inside = (cands >= q_min[:, None]) & (cands <= q_max[:, None])
+    gap = np.where(inside, np.abs(cands - reference[:, None]), np.inf)
+    best = cands[np.arange(len(q)), np.argmin(gap, axis=1)]
+    return np.where(inside.any(axis=1), best, q)
 
 
 def start_branches(kin: Kinematics, target: np.ndarray, reference: np.ndarray, n_random: int = 32,
@@ -170,15 +168,14 @@ def choose_branch(path: GluePath, kin: Kinematics, reference: np.ndarray, speed:
         PlanningError: No branch reaches the bead start, or none follows the whole bead.
     """
     reference = np.asarray(reference, dtype=float)
-    start = np.eye(4)
-    start[:3, :3], start[:3, 3] = path.orientation(0.0), path.sample(0.0)[0]
+    s, targets = _grid(path, _SPACING)
+    start = targets[0]
     qs = start_branches(kin, start, reference, n_random)
     if not qs:
         raise PlanningError(f"no IK solution for the bead start {np.round(start[:3, 3], 4).tolist()} m "
                             f"(frame {kin.frame}): out of reach")
     follows = {}
     if isinstance(kin, UrKinematics):  # all branches from one closed-form solve of the grid
-        s, targets = _grid(path, _SPACING)
         solutions = kin.analytic.solve(targets)
         branches = follow_branch(solutions, solutions[0])  # all eight, unwrapped once
         follows = {i: _follow_closed_form(kin, s, branches, q, speed, _MAX_JUMP) for i, q in enumerate(qs)}

@@ -57,7 +57,7 @@ class UrKinematics(Kinematics):
         pin.framesForwardKinematics(self.model, self.data, pin.neutral(self.model))
         offset = (self.data.oMf[flange].inverse() * self.data.oMf[self.frame_id]).homogeneous
         self.analytic = UrAnalyticIK(dh, offset, self.base_pose)
-        error = max(float(np.abs(self.analytic.fk(q) - self.fk(q)).max()) for q in _CHECK_Q)
+        error = float(np.abs(self.analytic.fk(_CHECK_Q) - np.array([self.fk(q) for q in _CHECK_Q])).max())
         if error > 1e-9:
             raise ValueError(f"the URDF's forward kinematics differs from the closed form of DH {dh} "
                              f"by {error:.2e}: not a plain UR arm")

@@ -155,6 +155,9 @@ class GluePath:
         """
         ss = self._arc_length(s)
         ks, kq, kh = self.key_s, self.key_q, self.key_h
+        if np.all(kq == kq[0]):  # one orientation for the whole bead (the seed's jobs): nothing to interpolate
+            q = np.repeat(kq[:1], len(ss), axis=0)
+            return q[0] if np.ndim(s) == 0 else q
         n = len(ks)
         i = np.clip(np.searchsorted(ks, ss, side="right") - 1, 0, n - 2)
 

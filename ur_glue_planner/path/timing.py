@@ -210,10 +210,11 @@ class _Layout:
         slope = 30.0 * tau ** 2 * (1.0 - tau) ** 2
         dur, s0, v0, v1 = (np.array([p[i] for p in changes])[:, None] for i in range(4))
         dv = v1 - v0
-        s = (s0 + v0 * dur * tau + dv * dur * integral).ravel()  # all changes in one usage call
+        s = (s0 + v0 * dur * tau + dv * dur * integral).ravel()
         sdot = (v0 + dv * step).ravel()
-        full = usage(s, sdot, (dv * slope / dur).ravel()).reshape(len(changes), -1)
-        base = usage(s, sdot, np.zeros_like(s)).reshape(len(changes), -1)
+        # every change, with and without its acceleration, in one usage call
+        full, base = usage(np.tile(s, 2), np.tile(sdot, 2),
+                           np.concatenate([(dv * slope / dur).ravel(), np.zeros_like(s)])).reshape(2, len(changes), -1)
         worst = np.max(np.where(full > np.maximum(base, 1.0) + 1e-9, full, 0.0), axis=1)
         moved = False
         for (_, _, _, _, key), w in zip(changes, worst):
