@@ -232,13 +232,11 @@ class Kinematics:
         """:meth:`fk_jacobian` of many configurations q (M, n): (M, 3) [m], (M, 3, 3), (M, 6, n)."""
         q = np.asarray(q, dtype=float).reshape(-1, self.n)
         model, data, fid, frames = self.model, self.data, self.frame_id, self.data.oMf
-        jacs, poses = [], []
-        for qk in q if self._identity else (self._full(x).copy() for x in q):
+        jac, pose = np.empty((len(q), 6, model.nv)), np.empty((len(q), 4, 4))
+        for k, qk in enumerate(q if self._identity else (self._full(x) for x in q)):
             # one Pinocchio pass per configuration (it places the frame too); the rest is vectorised
-            jacs.append(pin.computeFrameJacobian(model, data, qk, fid, _LWA))
-            poses.append(frames[fid].homogeneous)
-        jac = np.array(jacs).reshape(len(q), 6, model.nv)
-        pose = np.array(poses).reshape(len(q), 4, 4)
+            jac[k] = pin.computeFrameJacobian(model, data, qk, fid, _LWA)
+            pose[k] = frames[fid].homogeneous
         pos, rot = pose[:, :3, 3], pose[:, :3, :3]
         if not self._identity:
             jac = jac[:, :, self._idx_v]
