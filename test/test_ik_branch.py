@@ -10,9 +10,12 @@ import pytest
 from ur_glue_planner.defaults import DEFAULT_ORIENTATION_ZYX, DEFAULT_WAYPOINTS
 from ur_glue_planner.errors import PlanningError
 from ur_glue_planner.motion.ik_branch import _near, choose_branch, follow, start_branches
-from ur_glue_planner.motion.kinematics import ur_kinematics
+from ur_glue_planner.motion.kinematics import Kinematics, ur_kinematics
 from ur_glue_planner.orientation import rotation_angle, rotation_from_zyx_euler
 from ur_glue_planner.path.glue_path import build_glue_path
+from ur_sim_driver.description.params import joint_names, load_ur_params
+from ur_sim_driver.description.tool import get_tool
+from ur_sim_driver.description.urdf import build_urdf
 
 HOME = np.radians([0.0, -90.0, 0.0, -90.0, 0.0, 0.0])
 R_SEED = rotation_from_zyx_euler(*DEFAULT_ORIENTATION_ZYX)
@@ -79,3 +82,20 @@ def test_an_unreachable_bead_raises(kin):
     far = build_glue_path(np.array([[2.0, 0.0, 0.3], [2.2, 0.0, 0.3]]), R_SEED)
     with pytest.raises(PlanningError, match="out of reach"):
         choose_branch(far, kin, HOME, 0.15)
+
+
+def test_the_closed_form_choice_equals_the_random_restart_newton_choice(choice, seed_path):
+    # the same arm without the closed form: start branches from random guesses, followed by Newton
+    tool = get_tool("dispenser")
+    newton = Kinematics(build_urdf(load_ur_params("ur5"), tool=tool), joint_names(), tool.tip_name)
+    best, branches = choice
+    slow_best, slow_branches = choose_branch(seed_path, newton, HOME, 0.15)
+    np.testing.assert_allclose(best.q, slow_best.q, atol=1e-4)
+    assert best.peak_usage == pytest.approx(slow_best.peak_usage, rel=1e-3)
+    # every branch the random restarts found is among the closed-form ones, equally judged
+    for b in slow_branches:
+        twin = min(branches, key=lambda c: np.abs(c.q - b.q).max())
+        np.testing.assert_allclose(twin.q, b.q, atol=1e-4)
+        assert twin.feasible == b.feasible
+        if b.feasible:
+            assert twin.peak_usage == pytest.approx(b.peak_usage, rel=1e-3)

@@ -7,7 +7,7 @@ import math
 import numpy as np
 import pytest
 
-from ur_glue_planner.motion.kinematics import Kinematics, ur_kinematics
+from ur_glue_planner.motion.kinematics import Kinematics, pose_errors, ur_kinematics
 from ur_glue_planner.orientation import rot_x, rot_z, rotation_angle, rotation_from_zyx_euler
 from ur_sim_driver.description.params import joint_names, load_ur_params
 from ur_sim_driver.description.urdf import build_urdf
@@ -174,3 +174,56 @@ def test_joint_order_is_by_name_not_by_model_order(rng):
     qd = rng.uniform(-1, 1, 6)
     np.testing.assert_allclose(shuffled.jacobian_dot_times_qd(q[perm], qd[perm]),
                                plain.jacobian_dot_times_qd(q, qd), atol=1e-10)
+
+
+def _variants(rng):
+    """Kinematics whose batch methods must agree with the single-state ones: plain, moved base, shuffled and
+    partial joint lists, and a frame before the wrist (whose wrist joints do not move it)."""
+    urdf = build_urdf(load_ur_params("ur5"))
+    names = list(joint_names())
+    base = np.eye(4)
+    base[:3, :3], base[:3, 3] = rot_z(-1.1) @ rot_x(0.4), (0.2, 0.5, -0.3)
+    return [ur_kinematics("ur5", "dispenser"), ur_kinematics("ur10e", None, base_pose=base),
+            Kinematics(urdf, [names[i] for i in (5, 0, 3, 1, 4, 2)], "tool0"),
+            Kinematics(urdf, [names[0], names[2], names[3]], "wrist_3_link"),
+            Kinematics(urdf, names, "forearm_link")]
+
+
+def test_batch_fk_jacobian_and_drift_equal_the_single_state_methods(rng):
+    for kin in _variants(rng):
+        q, qd = rng.uniform(-3, 3, (20, kin.n)), rng.uniform(-1, 1, (20, kin.n))
+        pos, rot, jac = kin.fk_jacobian_batch(q)
+        drift = kin.jacobian_dot_times_qd_batch(q, qd)
+        np.testing.assert_allclose(kin.jacobian_dot_times_qd_batch(q, qd, jac), drift, atol=1e-15)
+        for k in range(len(q)):
+            p1, r1, j1 = kin.fk_jacobian(q[k])
+            np.testing.assert_allclose(pos[k], p1, atol=1e-14)
+            np.testing.assert_allclose(rot[k], r1, atol=1e-14)
+            np.testing.assert_allclose(jac[k], j1, atol=1e-14)
+            np.testing.assert_allclose(drift[k], kin.jacobian_dot_times_qd(q[k], qd[k]), atol=1e-12)
+
+
+def test_pose_errors_resolve_tiny_rotations():
+    target = np.eye(4)[None].repeat(3, axis=0)
+    angles = np.array([1e-13, 1e-7, 3.0])
+    rotation = np.stack([rot_z(a) for a in angles])
+    pos = np.array([[0.0, 0.0, 0.0], [3e-9, 4e-9, 0.0], [0.0, 0.0, 1.0]])
+    err_p, err_r = pose_errors(target, pos, rotation)
+    np.testing.assert_allclose(err_p, [0.0, 5e-9, 1.0], rtol=1e-12)
+    np.testing.assert_allclose(err_r, angles, rtol=1e-9)
+
+
+def test_path_ik_follows_nearby_poses_and_stops_at_the_first_unreachable_one(rng):
+    urdf = build_urdf(load_ur_params("ur5"))
+    kin = Kinematics(urdf, joint_names(), "tool0")
+    q0 = np.array([0.3, -1.4, 1.6, -1.8, -1.5, 0.4])
+    line = q0 + np.linspace(0.0, 0.3, 30)[:, None] * np.array([1.0, 0.5, -0.5, 0.2, 0.3, -1.0])
+    targets = np.array([kin.fk(q) for q in line])
+    res = kin.ik_path(targets, q0 + 0.01)
+    assert res.failed is None and res.position is None
+    np.testing.assert_allclose(res.q, line, atol=1e-5)
+    assert res.residual_pos.max() < 1e-6 and res.residual_rot.max() < 1e-6
+    targets[12, :3, 3] = (3.0, 0.0, 0.0)  # out of reach
+    res = kin.ik_path(targets, q0, iterations=15)
+    assert res.failed == 12 and res.iterations[12] == 15 and res.residual_pos[12] > 1.0
+    assert np.isnan(res.q[13:]).all()

@@ -4,6 +4,7 @@ import pytest
 
 from ur_glue_planner.job import parse_job
 from ur_glue_planner.path.glue_path import build_glue_path
+from ur_glue_planner.path.run_up import RunUpPath
 from ur_glue_planner.path.surface_path import SurfacePath
 from ur_glue_planner.scene.waypoints import job_waypoints, tool_axis
 from ur_glue_planner.scene.windshield import DEFAULT_WINDSHIELD
@@ -51,3 +52,22 @@ def test_tangent_curvature_and_standoff_along_the_nozzle_axis(chords, standoff):
     _, _, normal = DEFAULT_WINDSHIELD.project(line)
     t = np.sum((line - pos) * normal, axis=1) / np.sum(axis * normal, axis=1)  # ray to the line's tangent plane
     np.testing.assert_allclose(pos + t[:, None] * axis, line, atol=2e-5)
+
+
+@pytest.mark.parametrize('standoff', [0.0, 0.01])
+def test_derivatives_in_one_evaluation_equal_sample_and_curvature_vector(chords, standoff):
+    surf = SurfacePath(chords, DEFAULT_WINDSHIELD, standoff, AXIS)
+    s = np.linspace(0.0, chords.length, 300, endpoint=False)
+    for path, x in ((chords, s), (surf, s), (RunUpPath(surf, 0.05, 0.04), s + 0.02)):
+        pos, tan, kvec = path.derivatives(x)
+        np.testing.assert_array_equal(pos, path.sample(x)[0])
+        np.testing.assert_array_equal(tan, path.sample(x)[1])
+        np.testing.assert_array_equal(kvec, path.curvature_vector(x))
+
+
+def test_position_alone_equals_the_sampled_one(chords):
+    surf = SurfacePath(chords, DEFAULT_WINDSHIELD, 0.003, AXIS)
+    s = np.linspace(0.0, chords.length, 50, endpoint=False)
+    for path, x in ((chords, s), (surf, s), (RunUpPath(surf, 0.05, 0.04), s + 0.02)):
+        np.testing.assert_array_equal(path.position(x), path.sample(x)[0])
+        np.testing.assert_array_equal(path.position(x[7]), path.sample(x[7])[0])

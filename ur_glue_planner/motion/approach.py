@@ -160,20 +160,24 @@ def tool_axis_move(kin: Kinematics, q_anchor: np.ndarray, pose_anchor: np.ndarra
         d, dd, ddd = distance * (1.0 - shape), -distance * dshape / duration, -distance * ddshape / duration ** 2
     else:
         d, dd, ddd = distance * shape, distance * dshape / duration, distance * ddshape / duration ** 2
-    k = len(times)
-    q, qd, qdd = np.zeros((k, kin.n)), np.zeros((k, kin.n)), np.zeros((k, kin.n))
-    order = range(k - 1, -1, -1) if toward_anchor else range(k)
-    target, q_prev = np.eye(4), np.asarray(q_anchor, dtype=float)
-    target[:3, :3] = rot
-    for i in order:
-        target[:3, 3] = p0 - d[i] * u
-        q[i] = q_prev if d[i] == 0.0 else kin.ik_or_raise(target, q_prev, f"{name} sample {i} ({d[i]:.4f} m off)")
-        jac = kin.jacobian(q[i])
-        twist = np.concatenate([-u * dd[i], np.zeros(3)])
-        qd[i] = np.linalg.solve(jac, twist)
-        qdd[i] = np.linalg.solve(jac, np.concatenate([-u * ddd[i], np.zeros(3)])
-                                 - kin.jacobian_dot_times_qd(q[i], qd[i]))
-        q_prev = q[i]
+    # IK runs outward from the anchor, so the move stays in its arm configuration
+    order = np.arange(len(times))[::-1] if toward_anchor else np.arange(len(times))
+    targets = np.broadcast_to(np.asarray(pose_anchor, dtype=float), (len(times), 4, 4)).copy()
+    targets[:, :3, 3] = p0 - d[order, None] * u
+    ik = kin.ik_path(targets, np.asarray(q_anchor, dtype=float), first_iterations=200, iterations=200)
+    if ik.failed is not None:
+        i = int(order[ik.failed])
+        raise PlanningError(f"IK failed for {name} sample {i} ({d[i]:.4f} m off): residual "
+                            f"{ik.residual_pos[ik.failed]:.3e} m, {ik.residual_rot[ik.failed]:.3e} rad after "
+                            f"{ik.iterations[ik.failed]} iterations (frame {kin.frame}, "
+                            f"q = {np.round(ik.q[ik.failed], 4).tolist()})")
+    q, jac = np.empty_like(ik.q), np.empty((len(times), 6, kin.n))
+    q[order] = ik.q  # the anchor's own sample is q_anchor: IK starts there on its pose
+    jac[order] = kin.fk_jacobian_batch(ik.q)[2] if ik.jacobian is None else ik.jacobian
+    zero = np.zeros((len(times), 3))
+    qd = np.linalg.solve(jac, np.hstack([-u * dd[:, None], zero])[:, :, None])[:, :, 0]
+    qdd = np.linalg.solve(jac, (np.hstack([-u * ddd[:, None], zero])
+                                - kin.jacobian_dot_times_qd_batch(q, qd, jac))[:, :, None])[:, :, 0]
     return JointSegment(name, times, q, qd, qdd)
 
 

@@ -5,10 +5,11 @@ flipped or not); warm-started IK then stays in the branch it starts in. Not ever
 can follow the whole bead: for the seed's windshield, only the branches with the wrist flipped
 (q5 > 0 in the ROS 2 description) reach the top edge, and IK from the home pose lands in one
 of the others for some start points (the seed's first waypoint). So the planner collects the
-branches at the bead start (IK from the reference pose and from fixed pseudo-random guesses),
-follows each one along the bead on a coarse grid, and keeps the branch that stays continuous
-with the lowest peak joint-speed demand (furthest from singularities); near-ties go to the
-branch nearest to the reference pose.
+branches at the bead start (IK from the reference pose, then for a UR arm its eight closed-form
+solutions, for other kinematics fixed pseudo-random guesses), follows each one along the bead on
+a coarse grid (a UR arm: its closed-form branch, all grid points at once), and keeps the branch
+that stays continuous with the lowest peak joint-speed demand (furthest from singularities);
+near-ties go to the branch nearest to the reference pose.
 """
 
 from __future__ import annotations
@@ -19,10 +20,14 @@ from dataclasses import dataclass
 import numpy as np
 
 from ur_glue_planner.errors import PlanningError
+from ur_glue_planner.motion.analytic_ik import follow_branch, nearest_branch
 from ur_glue_planner.motion.kinematics import Kinematics
+from ur_glue_planner.motion.ur_arm_kinematics import UrKinematics
 from ur_glue_planner.path.glue_path import GluePath
 
 _TWO_PI = 2.0 * math.pi
+_SPACING = 0.02  # [m] grid on which a branch is followed along the bead
+_MAX_JUMP = 0.6  # [rad] a larger joint step between grid points is a change of branch
 
 
 @dataclass(frozen=True)
@@ -48,25 +53,28 @@ class Branch:
 
 def _near(q: np.ndarray, reference: np.ndarray, q_min: np.ndarray, q_max: np.ndarray) -> np.ndarray:
     """q with each joint shifted by whole turns towards the reference, staying within limits."""
-    out = q.copy()
-    for j in range(len(q)):
-        cands = q[j] + _TWO_PI * np.arange(-2, 3)
-        cands = cands[(cands >= q_min[j]) & (cands <= q_max[j])]
-        if cands.size:
-            out[j] = cands[np.argmin(np.abs(cands - reference[j]))]
-    return out
+    cands = q[:, None] + _TWO_PI * np.arange(-2, 3)  # (n, 5)
+    inside = (cands >= q_min[:, None]) & (cands <= q_max[:, None])
+    gap = np.where(inside, np.abs(cands - reference[:, None]), np.inf)
+    best = cands[np.arange(len(q)), np.argmin(gap, axis=1)]
+    return np.where(inside.any(axis=1), best, q)
 
 
 def start_branches(kin: Kinematics, target: np.ndarray, reference: np.ndarray, n_random: int = 32,
                    seed: int = 0) -> list[np.ndarray]:
     """Distinct IK solutions (each (n,) [rad]) of the world pose ``target`` (4, 4).
 
-    Guesses: ``reference`` first, then ``n_random`` uniform ones in [-pi, pi] from a fixed seed.
+    Guesses: ``reference`` first, then the closed-form solutions of a UR arm
+    (:class:`~ur_glue_planner.motion.ur_arm_kinematics.UrKinematics`), or for other
+    kinematics ``n_random`` uniform ones in [-pi, pi] from a fixed seed. Each is refined by
+    Newton (:meth:`Kinematics.ik`), so every solution meets its tolerance on the URDF.
     """
-    rng = np.random.default_rng(seed)
-    guesses = [np.asarray(reference, dtype=float)] + list(rng.uniform(-math.pi, math.pi, (n_random, kin.n)))
+    if isinstance(kin, UrKinematics):
+        others = [q for q in kin.ik_solutions(target) if not np.any(np.isnan(q))]
+    else:
+        others = list(np.random.default_rng(seed).uniform(-math.pi, math.pi, (n_random, kin.n)))
     found: list[np.ndarray] = []
-    for guess in guesses:
+    for guess in [np.asarray(reference, dtype=float)] + others:
         res = kin.ik(target, guess, max_iterations=100)
         if not res.converged:
             continue
@@ -78,22 +86,60 @@ def start_branches(kin: Kinematics, target: np.ndarray, reference: np.ndarray, n
     return found
 
 
-def follow(path: GluePath, kin: Kinematics, q_start: np.ndarray, speed: float, spacing: float = 0.02,
-           max_jump: float = 0.6) -> tuple[bool, float, str]:
+def _grid(path: GluePath, spacing: float) -> tuple[np.ndarray, np.ndarray]:
+    """Arc lengths (n,) [m] at most ``spacing`` apart over the whole path, and the poses (n, 4, 4) there."""
+    n = max(2, math.ceil(path.length / spacing) + 1)
+    s = np.linspace(0.0, path.length, n)
+    targets = np.zeros((n, 4, 4))
+    targets[:, :3, :3], targets[:, :3, 3], targets[:, 3, 3] = path.orientation(s), path.position(s), 1.0
+    return s, targets
+
+
+def _follow_closed_form(kin: UrKinematics, s: np.ndarray, branches: np.ndarray, q_start: np.ndarray,
+                        speed: float, max_jump: float) -> tuple[bool, float, str] | None:
+    """:func:`follow` on the grid's closed-form branches made continuous (n, 8, n_joints)
+    (:func:`~ur_glue_planner.motion.analytic_ik.follow_branch`); None if q_start is on none of them."""
+    branch, distance = nearest_branch(branches[0], q_start)
+    if distance > 1e-3:
+        return None
+    q = follow_branch(branches[:, branch], q_start)
+    ok = np.all((q >= kin.q_min) & (q <= kin.q_max), axis=1)  # NaN (out of reach) is not ok either
+    step = np.abs(np.diff(q, axis=0))
+    jumps = np.any(step > max_jump, axis=1)
+    fails = np.flatnonzero(~ok)
+    k_fail = int(fails[0]) if fails.size else len(s)
+    k_jump = int(np.argmax(jumps)) + 1 if np.any(jumps) else len(s)
+    if k_fail < len(s) and k_fail <= k_jump:
+        where = "out of reach" if np.any(np.isnan(q[k_fail])) else "beyond a joint limit"
+        return False, math.inf, f"IK fails at s = {s[k_fail]:.3f} m ({where} in this arm configuration)"
+    if k_jump < len(s):
+        j = int(np.argmax(step[k_jump - 1]))
+        return False, math.inf, f"{kin.joint_names[j]} jumps {step[k_jump - 1, j]:.2f} rad at s = {s[k_jump]:.3f} m"
+    peak = float(np.max(step / np.diff(s)[:, None] * speed / kin.v_max))
+    return True, peak, ""
+
+
+def follow(path: GluePath, kin: Kinematics, q_start: np.ndarray, speed: float, spacing: float = _SPACING,
+           max_jump: float = _MAX_JUMP) -> tuple[bool, float, str]:
     """Follow the bead from ``q_start`` on a grid of ``spacing`` [m].
+
+    A UR arm follows its closed-form branch through q_start; other kinematics run warm-started
+    IK from grid point to grid point.
 
     Returns:
         (feasible, peak joint-speed usage at ``speed`` [m/s], reason if not feasible). A joint
         step over ``max_jump`` [rad] between grid points is a branch change.
     """
-    n = max(2, math.ceil(path.length / spacing) + 1)
-    s = np.linspace(0.0, path.length, n)
-    pos, rot = path.sample(s)[0], path.orientation(s)
-    target = np.eye(4)
+    s, targets = _grid(path, spacing)
+    if isinstance(kin, UrKinematics):
+        solutions = kin.analytic.solve(targets)
+        out = _follow_closed_form(kin, s, follow_branch(solutions, solutions[0]), np.asarray(q_start, dtype=float),
+                                  speed, max_jump)
+        if out is not None:
+            return out
     q_prev, peak = np.asarray(q_start, dtype=float), 0.0
-    for k in range(n):
-        target[:3, :3], target[:3, 3] = rot[k], pos[k]
-        res = kin.ik(target, q_prev, max_iterations=50)
+    for k in range(len(s)):
+        res = kin.ik(targets[k], q_prev, max_iterations=50)
         if not res.converged:
             return False, math.inf, f"IK fails at s = {s[k]:.3f} m (residual {res.residual_pos:.2e} m)"
         step = np.abs(res.q - q_prev)
@@ -122,15 +168,20 @@ def choose_branch(path: GluePath, kin: Kinematics, reference: np.ndarray, speed:
         PlanningError: No branch reaches the bead start, or none follows the whole bead.
     """
     reference = np.asarray(reference, dtype=float)
-    start = np.eye(4)
-    start[:3, :3], start[:3, 3] = path.orientation(0.0), path.sample(0.0)[0]
+    s, targets = _grid(path, _SPACING)
+    start = targets[0]
     qs = start_branches(kin, start, reference, n_random)
     if not qs:
         raise PlanningError(f"no IK solution for the bead start {np.round(start[:3, 3], 4).tolist()} m "
                             f"(frame {kin.frame}): out of reach")
+    follows = {}
+    if isinstance(kin, UrKinematics):  # all branches from one closed-form solve of the grid
+        solutions = kin.analytic.solve(targets)
+        branches = follow_branch(solutions, solutions[0])  # all eight, unwrapped once
+        follows = {i: _follow_closed_form(kin, s, branches, q, speed, _MAX_JUMP) for i, q in enumerate(qs)}
     branches = []
-    for q in qs:
-        ok, peak, why = follow(path, kin, q, speed)
+    for i, q in enumerate(qs):
+        ok, peak, why = follows.get(i) or follow(path, kin, q, speed, _SPACING, _MAX_JUMP)
         branches.append(Branch(q, ok, peak, float(np.linalg.norm(q - reference)), why))
     good = [b for b in branches if b.feasible]
     if not good:

@@ -1,8 +1,9 @@
 """The build stage: joint positions, velocities and accelerations along the timed bead.
 
-Per sample k (time t_k, arc length s_k): IK of the path pose, warm-started from the previous
-sample extrapolated with its velocity and acceleration (most samples then already meet
-1e-6 m / 1e-6 rad without a Newton step, the rest after one); then, with the LWA Jacobian J at the solution,
+Per sample k (time t_k, arc length s_k): IK of the path pose by :meth:`Kinematics.ik_path` (for a
+UR arm the closed-form solution in the branch of the first sample, checked and if need be refined
+by Pinocchio; per-sample warm-started Newton for other kinematics), all samples at once; then, with
+the LWA Jacobian J at the solution (batched over the samples),
 
     qd  = J^-1 [t sdot ; w_s sdot]
     qdd = J^-1 ([t sddot + k sdot^2 ; w_s sddot + w_s' sdot^2] - dJ/dt qd)
@@ -110,17 +111,27 @@ def _rotvec_small(q: np.ndarray) -> np.ndarray:
     return v * scale[:, None]
 
 
+def orientations_and_rates(path: GluePath, s: np.ndarray, h: float = _H_ORIENT
+                           ) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
+    """Path orientations (M, 3, 3) at s (M,) [m], with :func:`orientation_rates`, from one quaternion evaluation."""
+    s = np.asarray(s, dtype=float)
+    c = s if path.closed else np.clip(s, h, path.length - h)
+    qm, q0, qp = path.quaternion(np.concatenate([c - h, c, c + h])).reshape(3, len(s), 4)
+    q = q0.copy()
+    ends = c != s  # only an open path's ends shift the stencil
+    if np.any(ends):
+        q[ends] = path.quaternion(s[ends])
+    fwd = _rotvec_small(quat_multiply(qp, quat_conjugate(q0))) / h  # w_s at c + h/2
+    back = _rotvec_small(quat_multiply(q0, quat_conjugate(qm))) / h  # w_s at c - h/2
+    return matrix_from_quat(q), 0.5 * (fwd + back), (fwd - back) / h
+
+
 def orientation_rates(path: GluePath, s: np.ndarray, h: float = _H_ORIENT) -> tuple[np.ndarray, np.ndarray]:
     """Angular rate w_s (M, 3) [rad/m] of the path orientation and its derivative (M, 3) [rad/m^2].
 
     World axes: d R / ds = [w_s]x R. Open paths shift the stencil inside [h, L - h].
     """
-    s = np.asarray(s, dtype=float)
-    c = s if path.closed else np.clip(s, h, path.length - h)
-    qm, q0, qp = path.quaternion(c - h), path.quaternion(c), path.quaternion(c + h)
-    fwd = _rotvec_small(quat_multiply(qp, quat_conjugate(q0))) / h  # w_s at c + h/2
-    back = _rotvec_small(quat_multiply(q0, quat_conjugate(qm))) / h  # w_s at c - h/2
-    return 0.5 * (fwd + back), (fwd - back) / h
+    return orientations_and_rates(path, s, h)[1:]
 
 
 def _nearest_waypoint(path: GluePath, s: float) -> int:
@@ -150,61 +161,62 @@ class _Pass:
     seconds: float
 
 
+def _targets(pos: np.ndarray, rot: np.ndarray) -> np.ndarray:
+    """Poses (M, 4, 4) from positions (M, 3) and rotations (M, 3, 3)."""
+    out = np.zeros((len(pos), 4, 4))
+    out[:, :3, :3], out[:, :3, 3], out[:, 3, 3] = rot, pos, 1.0
+    return out
+
+
+def _solve_each(path: GluePath, s: np.ndarray, jac: np.ndarray, rhs: np.ndarray) -> np.ndarray:
+    """x (M, n) with jac[k] x[k] = rhs[k]; PlanningError naming the first singular sample."""
+    try:
+        return np.linalg.solve(jac, rhs[:, :, None])[:, :, 0]
+    except np.linalg.LinAlgError as exc:
+        k = next(k for k in range(len(jac)) if np.linalg.matrix_rank(jac[k]) < jac.shape[1])
+        raise PlanningError(f"singular Jacobian at {_where(path, k, s[k])}") from exc
+
+
 def _solve(path: GluePath, timing: PathTiming, kin: Kinematics, q_start: np.ndarray,
            v_max: np.ndarray, jump_safety: float, first_iterations: int, iterations: int) -> _Pass:
     s, sdot, sddot, times = timing.s, timing.sdot, timing.sddot, timing.times
-    pos, tan, _ = path.sample(s)
-    kvec = path.curvature_vector(s)
-    rot = matrix_from_quat(path.quaternion(s))
-    w_s, dw_s = orientation_rates(path, s)
+    pos, tan, kvec = path.derivatives(s)
+    rot, w_s, dw_s = orientations_and_rates(path, s)
     # task velocity = v_s sdot, task acceleration = v_s sddot + a_s sdot^2
     v_s, a_s = np.hstack([tan, w_s]), np.hstack([kvec, dw_s])
-    m, n = len(s), kin.n
-    out = {k: np.zeros((m, n)) for k in ("q", "q_s", "q_ss", "qd", "qdd")}
-    tip, tip_rot = np.zeros((m, 3)), np.zeros((m, 3, 3))
-    speed, res_p, res_r = np.zeros(m), np.zeros(m), np.zeros(m)
-    iters = np.zeros(m, dtype=int)
-    target = np.eye(4)
     t0 = time.perf_counter()
-    for k in range(m):
-        target[:3, :3], target[:3, 3] = rot[k], pos[k]
-        if k == 0:
-            guess, budget = q_start, first_iterations
-        else:
-            h = times[k] - times[k - 1]
-            guess = out["q"][k - 1] + h * out["qd"][k - 1] + 0.5 * h * h * out["qdd"][k - 1]
-            budget = iterations
-        res = kin.ik(target, guess, max_iterations=budget)
-        if not res.converged:
-            raise PlanningError(f"IK failed at {_where(path, k, s[k])}: residual {res.residual_pos:.2e} m, "
-                                f"{res.residual_rot:.2e} rad after {res.iterations} iterations")
-        q = res.q
-        p, r, jac = kin.fk_jacobian(q)
-        try:
-            q_s = np.linalg.solve(jac, v_s[k])
-            # dJ/dt qd is quadratic in qd, so it equals sdot^2 times its value at qd = q_s
-            q_ss = np.linalg.solve(jac, a_s[k] - kin.jacobian_dot_times_qd(q, q_s))
-        except np.linalg.LinAlgError as exc:
-            raise PlanningError(f"singular Jacobian at {_where(path, k, s[k])}") from exc
-        qd = q_s * sdot[k]
-        qdd = q_s * sddot[k] + q_ss * sdot[k] ** 2
-        if k > 0:
-            h = times[k] - times[k - 1]
-            step = np.abs(q - out["q"][k - 1])
-            allowed = jump_safety * h * np.maximum(v_max, np.maximum(np.abs(qd), np.abs(out["qd"][k - 1])))
-            bad = np.flatnonzero(step > allowed)
-            if bad.size:
-                j = int(bad[np.argmax(step[bad] / allowed[bad])])
-                raise PlanningError(f"joint {kin.joint_names[j]} jumps {step[j]:.4f} rad between samples {k - 1} "
-                                    f"and {k} (allowed {allowed[j]:.4f} rad) at {_where(path, k, s[k])}: "
-                                    f"the IK changed branch (singularity or joint limit)")
-        out["q"][k], out["q_s"][k], out["q_ss"][k], out["qd"][k], out["qdd"][k] = q, q_s, q_ss, qd, qdd
-        tip[k], tip_rot[k] = p, r
-        speed[k] = np.linalg.norm(jac[:3] @ qd)
-        res_p[k], res_r[k], iters[k] = res.residual_pos, res.residual_rot, res.iterations
+    ik = kin.ik_path(_targets(pos, rot), q_start, first_iterations=first_iterations, iterations=iterations)
+    m = len(s) if ik.failed is None else ik.failed  # the samples solved, in order
+    q = ik.q[:m]
+    if ik.jacobian is not None:
+        tip, tip_rot, jac = ik.position[:m], ik.rotation[:m], ik.jacobian[:m]
+    else:
+        tip, tip_rot, jac = kin.fk_jacobian_batch(q)
+    q_s = _solve_each(path, s, jac, v_s[:m])
+    # dJ/dt qd is quadratic in qd, so it equals sdot^2 times its value at qd = q_s
+    q_ss = _solve_each(path, s, jac, a_s[:m] - kin.jacobian_dot_times_qd_batch(q, q_s, jac))
+    qd = q_s * sdot[:m, None]
+    qdd = q_s * sddot[:m, None] + q_ss * (sdot[:m] ** 2)[:, None]
+    # a step far beyond what the joint speeds allow is a change of IK branch
+    step = np.abs(np.diff(q, axis=0))
+    allowed = jump_safety * np.diff(times[:m])[:, None] * np.maximum(
+        v_max, np.maximum(np.abs(qd[1:]), np.abs(qd[:-1])))
+    jumps = np.flatnonzero(np.any(step > allowed, axis=1))
+    if jumps.size:
+        k = int(jumps[0]) + 1
+        bad = np.flatnonzero(step[k - 1] > allowed[k - 1])
+        j = int(bad[np.argmax(step[k - 1, bad] / allowed[k - 1, bad])])
+        raise PlanningError(f"joint {kin.joint_names[j]} jumps {step[k - 1, j]:.4f} rad between samples {k - 1} "
+                            f"and {k} (allowed {allowed[k - 1, j]:.4f} rad) at {_where(path, k, s[k])}: "
+                            f"the IK changed branch (singularity or joint limit)")
+    if ik.failed is not None:
+        k = ik.failed
+        raise PlanningError(f"IK failed at {_where(path, k, s[k])}: residual {ik.residual_pos[k]:.2e} m, "
+                            f"{ik.residual_rot[k]:.2e} rad after {ik.iterations[k]} iterations")
+    speed = np.linalg.norm(np.einsum("mij,mj->mi", jac[:, :3], qd), axis=1)
     seconds = time.perf_counter() - t0
-    return _Pass(out["q"], out["q_s"], out["q_ss"], out["qd"], out["qdd"], tip, quat_from_matrix(tip_rot), speed,
-                 res_p, res_r, iters, seconds)
+    return _Pass(q, q_s, q_ss, qd, qdd, tip, quat_from_matrix(tip_rot), speed,
+                 ik.residual_pos, ik.residual_rot, ik.iterations, seconds)
 
 
 def _runs(flag: np.ndarray) -> list[np.ndarray]:
@@ -230,11 +242,15 @@ def _usage_function(s: np.ndarray, q_s: np.ndarray, q_ss: np.ndarray, v_lim: np.
                     a_lim: np.ndarray) -> Usage:
     """usage(s, sdot, sddot) from the path derivatives sampled at s (linear in between)."""
     grid, keep = np.unique(s, return_index=True)
-    qs, qss = q_s[keep], q_ss[keep]
+    table = np.hstack([q_s[keep], q_ss[keep]])  # (G, 2n): both interpolated at once
+    n = q_s.shape[1]
 
     def usage(x: np.ndarray, sdot: np.ndarray, sddot: np.ndarray) -> np.ndarray:
-        a = np.column_stack([np.interp(x, grid, qs[:, j]) for j in range(qs.shape[1])])
-        b = np.column_stack([np.interp(x, grid, qss[:, j]) for j in range(qss.shape[1])])
+        # np.interp of every column: clamped to the end values outside the grid
+        i = np.clip(np.searchsorted(grid, x, side="right") - 1, 0, len(grid) - 2)
+        w = np.clip((x - grid[i]) / (grid[i + 1] - grid[i]), 0.0, 1.0)[:, None]
+        ab = table[i] + w * (table[i + 1] - table[i])
+        a, b = ab[:, :n], ab[:, n:]
         vel = np.abs(a * sdot[:, None]) / v_lim
         acc = np.abs(a * sddot[:, None] + b * (sdot ** 2)[:, None]) / a_lim
         return np.maximum(vel, acc).max(axis=1)

@@ -9,6 +9,7 @@ the velocity of the frame's origin and its angular velocity, both in world axes.
 
 from __future__ import annotations
 
+import functools
 from collections.abc import Sequence
 from dataclasses import dataclass
 
@@ -18,6 +19,7 @@ import pinocchio as pin
 from ur_glue_planner.errors import PlanningError
 
 _LWA = pin.ReferenceFrame.LOCAL_WORLD_ALIGNED
+_REVOLUTE = ("JointModelRX", "JointModelRY", "JointModelRZ", "JointModelRevoluteUnaligned")
 
 
 @dataclass(frozen=True)
@@ -37,6 +39,65 @@ class IkResult:
     residual_rot: float
     iterations: int
     converged: bool
+
+
+@dataclass(frozen=True, eq=False)
+class PathIk:
+    """Outcome of :meth:`Kinematics.ik_path`: IK of a sequence of poses along a path.
+
+    Attributes:
+        q: (M, n) [rad]; rows from ``failed`` on are not solutions (NaN past it).
+        residual_pos: (M,) [m]; residual_rot: (M,) [rad]; iterations: (M,) Newton steps per sample.
+        failed: Index of the first pose that IK could not reach (its residuals are those of the
+            last attempt), or None.
+        position, rotation, jacobian: FK (M, 3), (M, 3, 3) and LWA Jacobians (M, 6, n) at q up to
+            ``failed``, when the solver computed them anyway (else None).
+    """
+
+    q: np.ndarray
+    residual_pos: np.ndarray
+    residual_rot: np.ndarray
+    iterations: np.ndarray
+    failed: int | None
+    position: np.ndarray | None = None
+    rotation: np.ndarray | None = None
+    jacobian: np.ndarray | None = None
+
+
+def pose_errors(targets: np.ndarray, position: np.ndarray, rotation: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
+    """Position error [m] and rotation angle [rad] (M,) between target poses (M, 4, 4) and (M, 3), (M, 3, 3).
+
+    The angle comes from both the sine and the cosine of the relative rotation, so it stays
+    accurate down to 1e-16 rad (an arccos of the trace would bottom out near 1e-8 rad).
+    """
+    rel = targets[:, :3, :3] @ np.swapaxes(rotation, 1, 2)
+    sin2 = np.stack([rel[:, 2, 1] - rel[:, 1, 2], rel[:, 0, 2] - rel[:, 2, 0], rel[:, 1, 0] - rel[:, 0, 1]], axis=1)
+    cos2 = np.trace(rel, axis1=1, axis2=2) - 1.0
+    return (np.linalg.norm(targets[:, :3, 3] - position, axis=1),
+            np.arctan2(np.linalg.norm(sin2, axis=1), cos2))
+
+
+def serial_drift(jac: np.ndarray, qd: np.ndarray) -> np.ndarray:
+    """dJ/dt qd (M, 6) of revolute joints in chain order, from their LWA Jacobians (M, 6, n) alone.
+
+    Column i of the Jacobian is (v_i, w_i): w_i the joint axis, v_i = w_i x (p - o_i). Turning
+    joint k moves column i by w_k x (v_i, w_i) for k <= i (both turn with joint k) and by
+    (w_i x v_k, 0) for k > i (only the frame origin p moves), so with the partial sums
+    W_i = sum_{k<=i} qd_k w_k and V_i = sum_{k<=i} qd_k v_k:
+    dw_i/dt = W_i x w_i and dv_i/dt = W_i x v_i + w_i x (V_n - V_i).
+    """
+    v, w, qd = jac[:, :3], jac[:, 3:], qd[:, None, :]  # (M, 3, n), (M, 3, n), (M, 1, n)
+    big_w = np.cumsum(w * qd, axis=2)
+    big_v = np.cumsum(v * qd, axis=2)
+    v_dot = _cross(big_w, v) + _cross(w, big_v[:, :, -1:] - big_v)
+    w_dot = _cross(big_w, w)
+    return np.concatenate([(v_dot * qd).sum(axis=2), (w_dot * qd).sum(axis=2)], axis=1)
+
+
+def _cross(a: np.ndarray, b: np.ndarray) -> np.ndarray:
+    """Cross products over axis 1 of (M, 3, n) arrays (np.cross wants the vectors last)."""
+    return np.stack([a[:, 1] * b[:, 2] - a[:, 2] * b[:, 1], a[:, 2] * b[:, 0] - a[:, 0] * b[:, 2],
+                     a[:, 0] * b[:, 1] - a[:, 1] * b[:, 0]], axis=1)
 
 
 class Kinematics:
@@ -79,6 +140,7 @@ class Kinematics:
         self._identity = (self.model.nq == len(idx_q) and np.array_equal(self._idx_q, np.arange(len(idx_q)))
                           and np.array_equal(self._idx_v, np.arange(len(idx_v))))
         self._q_full = pin.neutral(self.model)
+        self._chain_order = self._revolute_chain_order()
         self.q_min = self.model.lowerPositionLimit[self._idx_q].copy()
         self.q_max = self.model.upperPositionLimit[self._idx_q].copy()
         self.v_max = self.model.velocityLimit[self._idx_v].copy()
@@ -90,6 +152,18 @@ class Kinematics:
         self._has_base = not np.array_equal(pose, np.eye(4))
         for arr in (self.q_min, self.q_max, self.v_max, self.base_pose):
             arr.setflags(write=False)
+
+    def _revolute_chain_order(self) -> np.ndarray | None:
+        """Our joints sorted root to frame if all are revolute and on the frame's chain, else None."""
+        chain, jid = [], self.model.frames[self.frame_id].parentJoint
+        while jid > 0:
+            chain.append(jid)
+            jid = self.model.parents[jid]
+        chain.reverse()
+        ids = [self.model.getJointId(name) for name in self.joint_names]
+        if any(j not in chain or self.model.joints[j].shortname() not in _REVOLUTE for j in ids):
+            return None
+        return np.argsort([chain.index(j) for j in ids])
 
     @property
     def n(self) -> int:
@@ -154,6 +228,39 @@ class Kinematics:
             return np.concatenate([self._rb @ acc[:3], self._rb @ acc[3:]])
         return acc.copy()
 
+    def fk_jacobian_batch(self, q: np.ndarray) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
+        """:meth:`fk_jacobian` of many configurations q (M, n): (M, 3) [m], (M, 3, 3), (M, 6, n)."""
+        q = np.asarray(q, dtype=float).reshape(-1, self.n)
+        model, data, fid, frames = self.model, self.data, self.frame_id, self.data.oMf
+        jac, pose = np.empty((len(q), 6, model.nv)), np.empty((len(q), 4, 4))
+        for k, qk in enumerate(q if self._identity else (self._full(x) for x in q)):
+            # one Pinocchio pass per configuration (it places the frame too); the rest is vectorised
+            jac[k] = pin.computeFrameJacobian(model, data, qk, fid, _LWA)
+            pose[k] = frames[fid].homogeneous
+        pos, rot = pose[:, :3, 3], pose[:, :3, :3]
+        if not self._identity:
+            jac = jac[:, :, self._idx_v]
+        if self._has_base:
+            pos = pos @ self._rb.T + self.base_pose[:3, 3]
+            rot = self._rb @ rot
+            jac = np.concatenate([self._rb @ jac[:, :3], self._rb @ jac[:, 3:]], axis=1)
+        return pos, rot, jac
+
+    def jacobian_dot_times_qd_batch(self, q: np.ndarray, qd: np.ndarray,
+                                    jac: np.ndarray | None = None) -> np.ndarray:
+        """:meth:`jacobian_dot_times_qd` of many states (M, n) -> (M, 6); ``jac`` (M, 6, n) at q if known.
+
+        For revolute joints along the frame's chain (any arm of this project) it is computed
+        from the Jacobians alone (:func:`serial_drift`), else by Pinocchio state by state.
+        """
+        q, qd = np.asarray(q, dtype=float), np.asarray(qd, dtype=float)
+        if self._chain_order is None:
+            return np.array([self.jacobian_dot_times_qd(a, b) for a, b in zip(q, qd)]).reshape(len(q), 6)
+        if jac is None:
+            jac = self.fk_jacobian_batch(q)[2]
+        order = self._chain_order
+        return serial_drift(jac[:, :, order], qd[:, order])
+
     # ------------------------------------------------------------------ inverse
     def ik(self, target: np.ndarray, q0: np.ndarray, weights: np.ndarray | None = None, *,
            max_iterations: int = 200, tol_pos: float = 1e-6, tol_rot: float = 1e-6,
@@ -216,10 +323,35 @@ class Kinematics:
                                 f"(frame {self.frame}, q = {np.round(res.q, 4).tolist()})")
         return res.q
 
+    def ik_path(self, targets: np.ndarray, q0: np.ndarray, *, first_iterations: int = 300,
+                iterations: int = 20) -> PathIk:
+        """IK of a sequence of nearby poses (M, 4, 4), continuing from ``q0`` (n,) [rad].
+
+        Each pose is solved by :meth:`ik` from the previous solutions extrapolated linearly
+        (the first from ``q0``), with ``first_iterations`` then ``iterations`` steps; it stops
+        at the first pose that does not converge. A continuous path thus stays in the arm
+        configuration ``q0`` leads to.
+        """
+        targets = np.asarray(targets, dtype=float)
+        m = len(targets)
+        q = np.full((m, self.n), np.nan)
+        res_p, res_r = np.full(m, np.nan), np.full(m, np.nan)
+        iters = np.zeros(m, dtype=int)
+        for k in range(m):
+            guess = q0 if k == 0 else q[0] if k == 1 else 2.0 * q[k - 1] - q[k - 2]
+            res = self.ik(targets[k], guess, max_iterations=first_iterations if k == 0 else iterations)
+            q[k], res_p[k], res_r[k], iters[k] = res.q, res.residual_pos, res.residual_rot, res.iterations
+            if not res.converged:
+                return PathIk(q, res_p, res_r, iters, k)
+        return PathIk(q, res_p, res_r, iters, None)
+
 
 def ur_kinematics(ur_type: str, tool: str | None = "dispenser", frame: str | None = None,
                   base_pose: np.ndarray | None = None, tf_prefix: str = "") -> Kinematics:
     """Kinematics of a UR arm from ``ur_sim_driver``'s description (no simulator import).
+
+    A frame fixed to the flange (tool0, a tool tip, ...) gets a :class:`UrKinematics`, whose
+    path IK uses the closed-form UR solution; any other frame a plain :class:`Kinematics`.
 
     Args:
         ur_type: 'ur5', 'ur5e', 'ur10' or 'ur10e'.
@@ -228,12 +360,26 @@ def ur_kinematics(ur_type: str, tool: str | None = "dispenser", frame: str | Non
         base_pose: World pose (4, 4) of base_link; identity (robot at the world origin) if None.
         tf_prefix: Prefix of every frame and joint name.
     """
+    from ur_glue_planner.motion.ur_arm_kinematics import NotOnFlangeError, UrKinematics
     from ur_sim_driver.description.params import joint_names, load_ur_params
     from ur_sim_driver.description.tool import get_tool
-    from ur_sim_driver.description.urdf import build_urdf
 
     tool_def = get_tool(tool)
     if frame is None:
         frame = tool_def.tip_name if tool_def is not None else "tool0"
-    urdf = build_urdf(load_ur_params(ur_type), tf_prefix=tf_prefix, tool=tool_def)
-    return Kinematics(urdf, joint_names(tf_prefix), tf_prefix + frame, base_pose=base_pose)
+    params = load_ur_params(ur_type)
+    urdf = _ur_urdf(params.name, tool_def.name if tool_def is not None else None, tf_prefix)
+    try:
+        return UrKinematics(urdf, joint_names(tf_prefix), tf_prefix + frame, params.dh, base_pose, tf_prefix + "tool0")
+    except NotOnFlangeError:
+        return Kinematics(urdf, joint_names(tf_prefix), tf_prefix + frame, base_pose=base_pose)
+
+
+@functools.lru_cache(maxsize=32)
+def _ur_urdf(ur_type: str, tool: str | None, tf_prefix: str) -> str:
+    """The URDF string of a UR type with a tool (built once per process: it is pure and immutable)."""
+    from ur_sim_driver.description.params import load_ur_params
+    from ur_sim_driver.description.tool import get_tool
+    from ur_sim_driver.description.urdf import build_urdf
+
+    return build_urdf(load_ur_params(ur_type), tf_prefix=tf_prefix, tool=get_tool(tool))

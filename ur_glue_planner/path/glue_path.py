@@ -130,10 +130,20 @@ class GluePath:
             return pos[0], tan[0], float(kappa[0])
         return pos, tan, kappa
 
+    def position(self, s: np.ndarray | float) -> np.ndarray:
+        """Positions (M, 3) [m] at arc length s [m]; (3,) for a scalar s."""
+        pos = self._evaluate(s)[0]
+        return pos[0] if np.ndim(s) == 0 else pos
+
     def curvature_vector(self, s: np.ndarray | float) -> np.ndarray:
         """Curvature vector (M, 3) [1/m] = d(tangent)/ds, towards the arc centre; (3,) if scalar."""
         kvec = self._evaluate(s)[3]
         return kvec[0] if np.ndim(s) == 0 else kvec
+
+    def derivatives(self, s: np.ndarray | float) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
+        """Positions (M, 3) [m], unit tangents (M, 3) and curvature vectors (M, 3) [1/m] in one evaluation."""
+        pos, tan, _, kvec = self._evaluate(s)
+        return pos, tan, kvec
 
     def quaternion(self, s: np.ndarray | float) -> np.ndarray:
         """Tip orientation as unit quaternions (M, 4), w first; (4,) for a scalar s.
@@ -145,6 +155,9 @@ class GluePath:
         """
         ss = self._arc_length(s)
         ks, kq, kh = self.key_s, self.key_q, self.key_h
+        if np.all(kq == kq[0]):  # one orientation for the whole bead (the seed's jobs): nothing to interpolate
+            q = np.repeat(kq[:1], len(ss), axis=0)
+            return q[0] if np.ndim(s) == 0 else q
         n = len(ks)
         i = np.clip(np.searchsorted(ks, ss, side="right") - 1, 0, n - 2)
 

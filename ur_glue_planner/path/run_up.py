@@ -19,9 +19,9 @@ from ur_glue_planner.path.glue_path import GluePath
 class RunUpPath:
     """The motion path of a bead with a flying start, in its own arc length x = s + run_up [m].
 
-    It has the GluePath methods the planner's stages use (``sample``, ``curvature_vector``, ``quaternion``,
-    ``orientation``, ``length``, ``closed``, ``waypoint_s``); x in [0, length] maps to the loop's s modulo
-    its length.
+    It has the GluePath methods the planner's stages use (``sample``, ``position``, ``derivatives``,
+    ``curvature_vector``, ``quaternion``, ``orientation``, ``length``, ``closed``, ``waypoint_s``); x in
+    [0, length] maps to the loop's s modulo its length.
 
     Attributes:
         loop: The closed bead.
@@ -57,6 +57,12 @@ class RunUpPath:
 
     def curvature_vector(self, x: np.ndarray | float) -> np.ndarray:
         return self.loop.curvature_vector(self._loop_s(x))
+
+    def position(self, x: np.ndarray | float) -> np.ndarray:
+        return self.loop.position(self._loop_s(x))
+
+    def derivatives(self, x: np.ndarray | float) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
+        return self.loop.derivatives(self._loop_s(x))
 
     def quaternion(self, x: np.ndarray | float) -> np.ndarray:
         return self.loop.quaternion(self._loop_s(x))

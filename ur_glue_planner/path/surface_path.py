@@ -61,31 +61,37 @@ class SurfacePath:
             out = foot - along[:, None] * axis
         return out[0] if np.ndim(s) == 0 else out
 
-    def _derivatives(self, s: np.ndarray) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
+    def derivatives(self, s: np.ndarray | float) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
+        """Positions (M, 3) [m], unit tangents (M, 3) and curvature vectors (M, 3) [1/m] in one evaluation."""
         s = np.atleast_1d(np.asarray(s, dtype=float))
         if not self.closed:  # keep the stencils inside an open path
             s_t = np.clip(s, _H_TANGENT, self.length - _H_TANGENT)
             s_c = np.clip(s, _H_CURVATURE, self.length - _H_CURVATURE)
         else:
             s_t = s_c = s
-        pos = self.position(s)
-        d1 = (self.position(s_t + _H_TANGENT) - self.position(s_t - _H_TANGENT)) / (2 * _H_TANGENT)
+        # every stencil point projected in one call (a closed path's curvature stencil is centred on s itself)
+        stencil = [s, s_t + _H_TANGENT, s_t - _H_TANGENT, s_c + _H_CURVATURE, s_c - _H_CURVATURE]
+        if not self.closed:
+            stencil.append(s_c)
+        points = self.position(np.concatenate(stencil)).reshape(len(stencil), len(s), 3)
+        pos, t_plus, t_minus, c_plus, c_minus = points[:5]
+        c_mid = points[5] if not self.closed else pos
+        d1 = (t_plus - t_minus) / (2 * _H_TANGENT)
         tan = d1 / np.linalg.norm(d1, axis=1, keepdims=True)
-        d2 = (self.position(s_c + _H_CURVATURE) - 2 * self.position(s_c) + self.position(s_c - _H_CURVATURE)) \
-            / _H_CURVATURE ** 2
+        d2 = (c_plus - 2 * c_mid + c_minus) / _H_CURVATURE ** 2
         kvec = d2 - np.sum(d2 * tan, axis=1, keepdims=True) * tan  # the part across the tangent
         return pos, tan, kvec
 
     def sample(self, s: np.ndarray | float) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
         """Position [m], unit tangent and curvature [1/m], as GluePath.sample."""
-        pos, tan, kvec = self._derivatives(s)
+        pos, tan, kvec = self.derivatives(s)
         kappa = np.linalg.norm(kvec, axis=1)
         if np.ndim(s) == 0:
             return pos[0], tan[0], float(kappa[0])
         return pos, tan, kappa
 
     def curvature_vector(self, s: np.ndarray | float) -> np.ndarray:
-        kvec = self._derivatives(s)[2]
+        kvec = self.derivatives(s)[2]
         return kvec[0] if np.ndim(s) == 0 else kvec
 
     def quaternion(self, s: np.ndarray | float) -> np.ndarray:

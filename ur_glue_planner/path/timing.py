@@ -201,23 +201,26 @@ class _Layout:
         """
         if usage is None:
             return False
-        moved = False
+        changes = [p for p in self.pieces() if p[2] != p[3]]  # each has its own key
+        if not changes:
+            return False
         tau = np.linspace(0.0, 1.0, 33)
         step = tau ** 3 * (10.0 + tau * (-15.0 + 6.0 * tau))
         integral = tau ** 4 * (2.5 + tau * (-3.0 + tau))
         slope = 30.0 * tau ** 2 * (1.0 - tau) ** 2
-        for dur, s0, v0, v1, key in self.pieces():
-            if v0 == v1:
-                continue
-            dv = v1 - v0
-            s = s0 + v0 * dur * tau + dv * dur * integral
-            sdot = v0 + dv * step
-            full = usage(s, sdot, dv * slope / dur)
-            base = usage(s, sdot, np.zeros_like(s))
-            worst = float(np.max(np.where(full > np.maximum(base, 1.0) + 1e-9, full, 0.0)))
-            if worst > 0.0:
+        dur, s0, v0, v1 = (np.array([p[i] for p in changes])[:, None] for i in range(4))
+        dv = v1 - v0
+        s = (s0 + v0 * dur * tau + dv * dur * integral).ravel()
+        sdot = (v0 + dv * step).ravel()
+        # every change, with and without its acceleration, in one usage call
+        full, base = usage(np.tile(s, 2), np.tile(sdot, 2),
+                           np.concatenate([(dv * slope / dur).ravel(), np.zeros_like(s)])).reshape(2, len(changes), -1)
+        worst = np.max(np.where(full > np.maximum(base, 1.0) + 1e-9, full, 0.0), axis=1)
+        moved = False
+        for (_, _, _, _, key), w in zip(changes, worst):
+            if w > 0.0:
                 current = self.acc.get(key, self.a_nom)
-                self.acc[key] = max(current * min(0.8, 1.0 / worst), floor)
+                self.acc[key] = max(current * min(0.8, 1.0 / float(w)), floor)
                 moved = moved or self.acc[key] < current
         return moved
 

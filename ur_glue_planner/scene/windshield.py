@@ -153,6 +153,18 @@ class WindshieldModel:
         disc = np.sqrt(np.maximum(mean ** 2 - gauss, 0.0))
         return np.stack([mean + disc, mean - disc], axis=-1)
 
+    def _height_and_slope(self, u: np.ndarray, v: np.ndarray) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
+        """Height w and its partial derivatives dw/du, dw/dv over (u, v) [m], from one pass over the terms."""
+        f, fu, fv = np.zeros(np.shape(u)), np.zeros(np.shape(u)), np.zeros(np.shape(u))
+        for (i, j), c in zip(self.exponents, self.coefficients):
+            ui, vj = u ** i, v ** j
+            f = f + c * ui * vj
+            if i:
+                fu = fu + c * i * u ** (i - 1) * vj
+            if j:
+                fv = fv + c * j * ui * v ** (j - 1)
+        return f, fu, fv
+
     def project(self, points: np.ndarray, frame: str = "world", iterations: int = 8
                 ) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
         """Closest points on the (unbounded) glue face.
@@ -160,7 +172,8 @@ class WindshieldModel:
         Args:
             points: Points (M, 3) [m] in ``frame``.
             frame: 'world' or 'local'.
-            iterations: Gauss-Newton steps; the face is nearly flat, so a few suffice.
+            iterations: Most Gauss-Newton steps; the face is nearly flat, so a few suffice (it
+                stops once no point moves more than 1e-13 m).
 
         Returns:
             uv (M, 2) [m], foot points (M, 3) [m] and unit normals (M, 3), both in ``frame``.
@@ -169,17 +182,22 @@ class WindshieldModel:
         local = self.world_to_local(p) if frame == "world" else p
         q = local @ self.local_from_panel  # panel coordinates
         u, v = q[:, 0].copy(), q[:, 1].copy()
+        f, fu, fv = self._height_and_slope(u, v)
         for _ in range(iterations):
-            fu, fv = self.height(u, v, du=1), self.height(u, v, dv=1)
-            r = np.stack([u - q[:, 0], v - q[:, 1], self.height(u, v) - q[:, 2]], axis=-1)
-            # normal equations of J = [[1, 0], [0, 1], [fu, fv]]
+            # normal equations of J = [[1, 0], [0, 1], [fu, fv]] for the residual (u, v, f) - q
+            ru, rv, rw = u - q[:, 0], v - q[:, 1], f - q[:, 2]
             a, b, d = 1.0 + fu * fu, fu * fv, 1.0 + fv * fv
-            gu, gv = r[:, 0] + fu * r[:, 2], r[:, 1] + fv * r[:, 2]
+            gu, gv = ru + fu * rw, rv + fv * rw
             det = a * d - b * b
-            u -= (d * gu - b * gv) / det
-            v -= (a * gv - b * gu) / det
-        return (np.stack([u, v], axis=-1), self.surface_point(u, v, frame),
-                self.surface_normal(u, v, frame))
+            step_u, step_v = (d * gu - b * gv) / det, (a * gv - b * gu) / det
+            u, v = u - step_u, v - step_v
+            f, fu, fv = self._height_and_slope(u, v)
+            if max(np.abs(step_u).max(initial=0.0), np.abs(step_v).max(initial=0.0)) <= 1e-13:
+                break
+        normal = np.stack([-fu, -fv, np.ones_like(u)], axis=-1)
+        normal /= np.linalg.norm(normal, axis=-1, keepdims=True)
+        return (np.stack([u, v], axis=-1), self._panel_to(np.stack([u, v, f], axis=-1), frame),
+                self._panel_to(normal, frame, direction=True))
 
     # ------------------------------------------------------------------ outline
     def outline_uv(self, offset: float = 0.0, n_points: int = 256) -> np.ndarray:
