@@ -22,7 +22,6 @@ trajectory) is checked once per process against rclpy's own conversion of a prob
 from __future__ import annotations
 
 import ctypes
-import logging
 import threading
 from collections.abc import Callable
 
@@ -30,6 +29,7 @@ import numpy as np
 from control_msgs.action import FollowJointTrajectory
 from control_msgs.msg import JointTolerance
 from rclpy.action import ActionServer
+from rclpy.logging import get_logger
 from rclpy.utilities import get_rmw_implementation_identifier
 from trajectory_msgs.msg import JointTrajectory, JointTrajectoryPoint
 
@@ -37,7 +37,7 @@ from ur_sim_driver import conversions as conv
 from ur_sim_driver.command_arrays import CommandArrays, from_points
 from ur_sim_driver.trajectory_cdr import read_joint_trajectory
 
-_log = logging.getLogger(__name__)
+_log = get_logger('ur_sim.goal_intake')
 Request = FollowJointTrajectory.Impl.SendGoalService.Request
 # Arrays of goals whose callback never came (rclpy drops a request whose goal id is in use) are let go beyond this.
 _KEEP = 8
@@ -136,7 +136,7 @@ class GoalIntake:
             request, cmd = self.split(address)
         except Exception as exc:  # never leave rclpy without a message: convert it the standard way
             self.failed = f'{type(exc).__name__}: {exc}'
-            _log.warning('goal request converted by rclpy (%s)', self.failed)
+            _log.warning(f'goal request converted by rclpy instead: {self.failed}')
             try:
                 return self._standard(address)
             except Exception:
