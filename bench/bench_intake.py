@@ -86,6 +86,7 @@ def run() -> dict:
         goal.trajectory = _trajectory()
         t_send = time.monotonic()
         future = client.send_goal_async(goal)
+        t_sent = time.monotonic()  # the client has converted, serialized and written the request
         _wait(future.done, 60.0, 'the goal response')
         t_accepted = time.monotonic()
         handle = future.result()
@@ -119,10 +120,12 @@ def run() -> dict:
         recorder = None
         return {
             'points': N,
-            'goal': {'accept_s': t_accepted - t_send, **_gaps(tmp / 'js.txt', t_send, t_goal_done),
+            'goal': {'accept_s': t_accepted - t_send, 'client_send_s': t_sent - t_send,
+                     **_gaps(tmp / 'js.txt', t_send, t_goal_done),
                      'note': 'accept_s: send_goal_async to the goal response at the client, including the '
-                             "client's own serialization and rclpy's deserialization in ur_sim's controller "
-                             'process (about 1 s per 100,000 points here)'},
+                             "client's own conversion and serialization (client_send_s: until send_goal_async "
+                             "returns; rclpy in this process, slowed by this process's other threads), the "
+                             "transfer, and ur_sim's controller process taking, reading and validating it"},
             'topic': {**_gaps(tmp / 'js.txt', t_topic, t_topic_done),
                       'speed_scaling_applied_ms': (t_applied - t_scaling) * 1e3,
                       'note': 'speed_scaling_applied_ms: publishing speed_scaling_input 0.5 right after the long '

@@ -24,7 +24,7 @@ from multiprocessing.connection import Connection
 
 import rclpy
 from control_msgs.action import FollowJointTrajectory
-from rclpy.action import ActionServer, CancelResponse, GoalResponse
+from rclpy.action import CancelResponse, GoalResponse
 from rclpy.callback_groups import MutuallyExclusiveCallbackGroup
 from rclpy.executors import ExternalShutdownException, MultiThreadedExecutor
 from rclpy.node import Node
@@ -33,8 +33,8 @@ from trajectory_msgs.msg import JointTrajectory
 
 from ur_sim_driver import conversions as conv
 from ur_sim_driver import passthrough, result_codes
-from ur_sim_driver.cdr import parse_joint_trajectory
 from ur_sim_driver.command_arrays import CommandArrays, from_points
+from ur_sim_driver.dds_profile import free_received_samples
 from ur_sim_driver.errors import TrajectoryError
 from ur_sim_driver.gateway_link import (
     STOP,
@@ -48,8 +48,10 @@ from ur_sim_driver.gateway_link import (
     GatewayConfig,
     Start,
 )
-from ur_sim_driver.memory import release_memory, use_mmap_for_large_blocks
+from ur_sim_driver.goal_intake import ArrayGoalActionServer, intake_error
+from ur_sim_driver.memory import release_memory, trim_heap, use_mmap_for_large_blocks
 from ur_sim_driver.tolerances import resolve_tolerances
+from ur_sim_driver.trajectory_cdr import read_joint_trajectory
 from ur_sim_driver.validation import validate_trajectory
 
 # From this many points on, the memory of a received trajectory is handed back to the system when it is done.
@@ -67,7 +69,8 @@ INACTIVE_TOPIC = "Can't accept new commands. subscriber is inactive"  # (logged 
 class _Waiter:
     """One goal's end, handed from the receiving thread to the goal's execute callback."""
 
-    def __init__(self) -> None:
+    def __init__(self, points: int) -> None:
+        self.points = points  # the trajectory's length
         self.event = threading.Event()
         self.ended: Ended | None = None
         self.canceled: bool | None = None
@@ -101,8 +104,9 @@ class TrajectoryGateway:
         ns = cfg.namespace.strip('/')
         base = f'/{ns}/{name}' if ns else f'/{name}'
         ordered = MutuallyExclusiveCallbackGroup()
-        self._action = ActionServer(
-            node, FollowJointTrajectory, f'{base}/follow_joint_trajectory', execute_callback=self._execute,
+        # Goal requests arrive without their points, which come as arrays (goal_intake.py).
+        self._action = ArrayGoalActionServer(
+            node, f'{base}/follow_joint_trajectory', execute_callback=self._execute,
             goal_callback=self._on_goal, handle_accepted_callback=self._on_accepted,
             cancel_callback=lambda _: CancelResponse.ACCEPT, callback_group=ordered)
         if not self.passthrough:  # upstream's passthrough controller has no topic interface
@@ -141,8 +145,10 @@ class TrajectoryGateway:
         return reason
 
     def _on_goal(self, goal: FollowJointTrajectory.Goal) -> GoalResponse:
-        traj = goal.trajectory
-        cmd = from_points(traj.joint_names, conv.time_to_sec(traj.header.stamp), traj.points)
+        cmd = self._action.arrays_of(goal)
+        if cmd is None:  # converted by rclpy: the points are in the message
+            traj = goal.trajectory
+            cmd = from_points(traj.joint_names, conv.time_to_sec(traj.header.stamp), traj.points)
         # Upstream's JTC rejects goals while inactive, and the controller_stopper deactivates it while the robot
         # cannot move. (Topic messages are refused by the simulation, which knows the state without delay.)
         refusal = self.refusal
@@ -174,19 +180,24 @@ class TrajectoryGateway:
         if self.passthrough:
             tolerances = passthrough.tolerances_of(conv.tolerance_specs(goal.goal_tolerance), self.cfg.joints,
                                                    conv.duration_to_sec(goal.goal_time_tolerance))
-            self._start(goal_handle, cmd, tolerances)
-            return
-        tolerances, reason = resolve_tolerances(
-            self.cfg.defaults, self.cfg.joints, conv.tolerance_specs(goal.path_tolerance),
-            conv.tolerance_specs(goal.goal_tolerance), conv.duration_to_sec(goal.goal_time_tolerance))
-        if reason is not None:
-            self.node.get_logger().error(f'Goal tolerances ignored, using the defaults: {reason}')
+        else:
+            tolerances, reason = resolve_tolerances(
+                self.cfg.defaults, self.cfg.joints, conv.tolerance_specs(goal.path_tolerance),
+                conv.tolerance_specs(goal.goal_tolerance), conv.duration_to_sec(goal.goal_time_tolerance))
+            if reason is not None:
+                self.node.get_logger().error(f'Goal tolerances ignored, using the defaults: {reason}')
+        large = cmd.count >= LARGE_TRAJECTORY
         self._start(goal_handle, cmd, tolerances)
+        if large:
+            # Handed over: the taken C request's many small blocks and the arrays were freed in executor
+            # threads' heaps, which keep the pages until trimmed.
+            del cmd
+            trim_heap()
 
     def _start(self, goal_handle, cmd, tolerances) -> None:
         token = bytes(goal_handle.goal_id.uuid)
         with self._lock:
-            self._waiters[token] = _Waiter()
+            self._waiters[token] = _Waiter(cmd.count)
             self._handles[token] = goal_handle
         self._send(Start(token, cmd, tolerances, self.name))
         goal_handle.execute()
@@ -195,7 +206,7 @@ class TrajectoryGateway:
         # Whether the controller is active is decided by the simulation, which knows it without delay (a message
         # right after the robot can move again meets the controller that the controller_stopper restores).
         try:
-            cmd = parse_joint_trajectory(data)
+            cmd = read_joint_trajectory(data)
         except TrajectoryError as exc:
             self.node.get_logger().error(f'Dropped JointTrajectory message: {exc}')
             return
@@ -204,6 +215,9 @@ class TrajectoryGateway:
             self.node.get_logger().error(f'Dropped JointTrajectory message: {reason}')
             return
         self._send(Start(None, cmd, None, self.name))
+        if cmd.count >= LARGE_TRAJECTORY:
+            del cmd
+            trim_heap()  # the arrays may have been carved from an executor thread's heap: give its pages back
 
     # ---- execution -----------------------------------------------------------------------------------
     def _execute(self, goal_handle) -> FollowJointTrajectory.Result:
@@ -218,8 +232,8 @@ class TrajectoryGateway:
         with self._lock:
             self._waiters.pop(token, None)
             self._handles.pop(token, None)
-        # Drop the (possibly huge) request: rclpy keeps the handle until the result expires (15 min).
-        large = len(goal_handle.request.trajectory.points) >= LARGE_TRAJECTORY
+        # Drop the request: rclpy keeps the handle until the result expires (15 min).
+        large = waiter.points >= LARGE_TRAJECTORY
         goal_handle._goal_request = None
         if large:
             # Once more a little later: rclpy lets go of the message's last references after this returns.
@@ -324,14 +338,22 @@ def run_gateway(conn: Connection, sim_time: mmap.mmap) -> None:
     faulthandler.register(signal.SIGUSR1)  # `kill -USR1 <pid>` prints every thread's stack, for a hang
     use_mmap_for_large_blocks()
     cfg: GatewayConfig = conn.recv()
+    profile = free_received_samples()  # a large goal's receive buffer is not kept after it
     rclpy.init(signal_handler_options=SignalHandlerOptions.NO)
     shared = _Shared(conn, sim_time)
     executor = MultiThreadedExecutor(num_threads=4)
     gateways: dict[str, TrajectoryGateway] = {}
-    for name in cfg.controllers:
-        node = Node(name, namespace=cfg.namespace or '/')
-        gateways[name] = TrajectoryGateway(node, cfg, name, shared)
-        executor.add_node(node)
+    try:
+        for name in cfg.controllers:
+            node = Node(name, namespace=cfg.namespace or '/')
+            gateways[name] = TrajectoryGateway(node, cfg, name, shared)
+            executor.add_node(node)
+    finally:
+        if profile is not None:
+            profile.unlink(missing_ok=True)  # read when the first node was made
+    if intake_error() is not None and gateways:
+        next(iter(gateways.values())).node.get_logger().warning(
+            f'goal requests are converted point by point (slow for long trajectories): {intake_error()}')
     stopped = threading.Event()
     threading.Thread(target=_receive, args=(shared, gateways, stopped), name='gateway_receive', daemon=True).start()
     try:
