@@ -82,7 +82,8 @@ def executed_on_sim() -> dict:
     try:
         rclpy.init()
         with tempfile.TemporaryDirectory() as out:
-            code = run_job({'job': str(default_job_path()), 'out_dir': out, 'render': False}, threading.Event())
+            code = run_job({'job': str(default_job_path()), 'out_dir': out, 'render': False, 'video': False},
+                           threading.Event())
             summary = json.loads((Path(out) / 'summary.json').read_text()) if code in (0, 5) else {}
     finally:
         rclpy.try_shutdown()

@@ -39,7 +39,7 @@ class _Domain:
             env=self.env, stdout=subprocess.DEVNULL, stderr=subprocess.DEVNULL, start_new_session=True)
         self.ctx = Context()
         rclpy.init(context=self.ctx, domain_id=domain)
-        self.node = Node('bench_scale_probe', context=self.ctx)
+        self.node = Node(f'bench_scale_probe_{domain}', context=self.ctx)
 
     def clock(self) -> tuple[float, float]:
         return _clock_sample(self.node)
@@ -58,17 +58,26 @@ def run_batch(n: int) -> dict:
         for d in domains:
             d.clock()  # every simulator is up before the jobs start
         with tempfile.TemporaryDirectory() as tmp:
+            logs = [open(Path(tmp) / f'job{k}.err', 'w+') for k in range(n)]
             t0 = time.perf_counter()
             starts = [d.clock() for d in domains]
             jobs = [subprocess.Popen(['ur_glue_planner', '--ros-args', '-p', f'out_dir:={tmp}/job{k}',
                                       '-p', 'render:=false', '-p', 'video:=false'],
-                                     env=d.env, stdout=subprocess.DEVNULL, stderr=subprocess.DEVNULL)
-                    for k, d in enumerate(domains)]
+                                     env=d.env, stdout=subprocess.DEVNULL, stderr=log,
+                                     cwd=tmp)
+                    for k, (d, log) in enumerate(zip(domains, logs))]
             results = []
             for job, d, (w0, s0) in zip(jobs, domains, starts):
                 code = job.wait(timeout=900)
                 w1, s1 = d.clock()
-                results.append({'exit_code': code, 'wall_s': w1 - w0, 'sim_s': s1 - s0, 'rtf': (s1 - s0) / (w1 - w0)})
+                result = {'exit_code': code, 'wall_s': w1 - w0, 'sim_s': s1 - s0, 'rtf': (s1 - s0) / (w1 - w0)}
+                if code != 0:  # what the planner said last
+                    log = logs[len(results)]
+                    log.seek(0)
+                    result['stderr_tail'] = log.read()[-1500:]
+                results.append(result)
+            for log in logs:
+                log.close()
             batch_wall = time.perf_counter() - t0
     finally:
         for d in domains:
@@ -88,10 +97,10 @@ def run() -> dict:
         'machine': {'cpus': cores, 'processor': platform.processor() or platform.machine(),
                     'python': platform.python_version()},
         'batches': batches,
-        'scaling': (f'Each job is two processes; ur_sim as fast as possible keeps one core busy (its loop thread '
-                    f'holds the GIL), the planner mostly waits. Throughput grows with N until N reaches the '
-                    f'number of cores ({cores} here) and stays flat beyond: the simulators then share the cores '
-                    f'and each one\'s RTF falls in proportion.'),
+        'scaling': '; '.join(
+            f"N={b['jobs']}: {b['jobs_per_minute']:.1f} jobs/min (x{b['speed_up_vs_one']:.2f}), RTF per simulator "
+            f"{min(r['rtf'] for r in b['per_job']):.1f}-{max(r['rtf'] for r in b['per_job']):.1f}"
+            for b in batches) + f' on {cores} cores',
     }
 
 

@@ -120,6 +120,17 @@ def test_no_material_is_all_gap():
     assert fig['gap_length_mm'] == pytest.approx(1200.0) and fig['width_within_band_fraction'] == 0.0
 
 
+def test_material_in_one_spot_only_is_no_bead_on_the_line():
+    # The gun was on while the tip stood still (a run whose joint states or switching came too late): a blob,
+    # but no length of bead. Reported as such, not as the statistics of an empty profile.
+    s, pts, w, h, t = bead()
+    spot = np.zeros_like(w)
+    spot[10:20] = w[10:20]
+    fig = quality(s, np.repeat(pts[10:11], len(pts), axis=0), spot, h, t)
+    assert fig['deposit_points'] == 10 and 'width_mm' not in fig
+    assert fig['gap_length_mm'] == pytest.approx(1200.0) and fig['width_within_band_fraction'] == 0.0
+
+
 def test_projection_and_closure_helpers():
     station, dist = project_onto_polyline(np.array([[0.1, 0.01, 0.0], [0.41, 0.1, 0.0]]), CORNERS)
     np.testing.assert_allclose(station, [0.1, 0.5])

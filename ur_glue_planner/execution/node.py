@@ -36,6 +36,8 @@ from ur_glue_planner.report.video import render_video
 def _bead_line(label: str, bead: dict | None) -> str:
     if not bead:
         return f'{label}: no bead collected'
+    if 'width_mm' not in bead:
+        return f"{label}: no bead on the line ({bead.get('deposit_points', 0)} deposit points)"
     w, lat = bead['width_mm'], bead['lateral_deviation_mm']
     closure = bead.get('closure', {}).get('overlap_mm')
     return (f"{label}: width {w['mean']:.2f} mm (nominal {bead['nominal_width_mm']:.2f}, min {w['min']:.2f}, "
@@ -109,7 +111,9 @@ def run_job(params: dict, stop: threading.Event, context=None) -> int:
                 break
         main_plan, main_run, outcome, summary = results[0]
         executed = summary.get('executed', {})
-        if executed:
+        if 'note' in executed:
+            print(f"executed: {executed['note']} ({executed['samples']} samples)")
+        elif executed:
             print(f"executed: speed within 1 % on {100 * executed['fraction_within_1pct']:.1f} % of the bead, "
                   f"max tip deviation {executed['max_tip_deviation_mm']:.3f} mm, max joint tracking error "
                   f"{1e3 * executed['max_joint_tracking_error_rad']:.3f} mrad")

@@ -145,15 +145,21 @@ def bead_quality(points: np.ndarray, widths: np.ndarray, heights: np.ndarray, ti
         length += float(np.linalg.norm(line[-1] - line[0]))
         line = np.vstack([line, line[:1]])
     wet = widths > 0.0
-    if not np.any(wet):
+
+    def no_bead() -> tuple[dict, StationProfile]:  # nothing deposited, or nothing of it on the line
         empty = StationProfile(np.arange(0.0, length, step), np.zeros(int(np.ceil(length / step))),
                                np.zeros(int(np.ceil(length / step)), dtype=int))
-        return {'deposit_points': 0, 'line_length_mm': 1e3 * length, 'gap_length_mm': 1e3 * length,
+        return {'deposit_points': int(wet.sum()), 'line_length_mm': 1e3 * length, 'gap_length_mm': 1e3 * length,
                 'width_within_band_fraction': 0.0, 'nominal_width_mm': 1e3 * nominal_width}, empty
+
+    if not np.any(wet):
+        return no_bead()
     station, lateral = project_onto_polyline(points, line)
     prof = station_profile(station, widths, heights, times, length, closed, step)
     w, ok = prof.width, np.abs(prof.width - nominal_width) <= band * nominal_width
     covered = prof.width > 0.0
+    if not np.any(covered):
+        return no_bead()
     first, last = np.flatnonzero(wet)[[0, -1]]
     s_first, s_last = float(station[first]), float(station[last])
     gaps = [(float(prof.station[a]), (b - a + 1) * step) for a, b in _runs(~covered)]

@@ -85,6 +85,10 @@ def plot_bead(axes, prof: StationProfile, figures: dict, title: str) -> None:
     ax_l.set(xlabel='station along the bead [m]', ylabel='bead centre to line [mm]')
     ax_l.grid(True)
     ax_l.legend(fontsize=7, loc='upper right')
+    if 'width_mm' not in figures:
+        ax_w.text(0.01, 0.02, f"no bead on the line ({figures['deposit_points']} deposit points)",
+                  transform=ax_w.transAxes, fontsize=7, va='bottom')
+        return
     w, lat = figures['width_mm'], figures['lateral_deviation_mm']
     closure = figures.get('closure', {}).get('overlap_mm')
     text = (f"width {w['mean']:.2f} mm (min {w['min']:.2f}, max {w['max']:.2f}); within +-5 %: "

@@ -76,8 +76,13 @@ def summarize(plan: GluePlan, run: Executed | None, result_code: int | None, res
     bead_fig = analyse_bead(plan, run)
     if bead_fig is not None:
         summary['bead'] = bead_fig[0]
-    if run is not None and len(run.t) > 1:
-        inside = (run.t >= 0.0) & (run.t <= bead.times[-1])
+    inside = (run.t >= 0.0) & (run.t <= bead.times[-1]) if run is not None else np.zeros(0, bool)
+    if run is not None and (inside.sum() < 2 or not _cruise(run.t[inside], plan).any()):
+        # A client that could not keep up with /joint_states (a loaded machine, a fast simulation) has too few
+        # samples of the bead to judge it: said so, instead of figures of nothing.
+        summary['executed'] = {'samples': int(inside.sum()),
+                               'note': 'too few joint states recorded during the bead to judge its execution'}
+    elif run is not None:
         pos, speed = executed_tip(plan, Executed(run.t[inside], run.q[inside], run.qd[inside]))
         executed = speed_stats(pos, speed, v, _cruise(run.t[inside], plan))
         deviation = point_to_polyline_distance(pos, bead.tip_pos)
