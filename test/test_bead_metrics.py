@@ -6,6 +6,7 @@ import numpy as np
 import pytest
 
 from ur_glue_planner.report.bead_metrics import bead_quality, closure_overlap, project_onto_polyline
+from ur_glue_planner.report.bead_report import write_bead_figure
 
 W, H = 0.008, 0.0096  # nominal width and height [m]
 SPEED, SPACING = 0.15, 0.0005  # [m/s], [m] between deposit points
@@ -129,6 +130,14 @@ def test_material_in_one_spot_only_is_no_bead_on_the_line():
     fig = quality(s, np.repeat(pts[10:11], len(pts), axis=0), spot, h, t)
     assert fig['deposit_points'] == 10 and 'width_mm' not in fig
     assert fig['gap_length_mm'] == pytest.approx(1200.0) and fig['width_within_band_fraction'] == 0.0
+
+
+def test_no_bead_is_drawn_as_one_gap(tmp_path):
+    # The report's figure of a run that laid no bead on the line: the whole line one gap, and the words.
+    s, pts, w, h, t = bead()
+    fig, prof = bead_quality(pts, np.zeros_like(w), h, t, CORNERS, W, closed=True)
+    path = write_bead_figure([('ours', prof, fig)], tmp_path / 'bead.png')
+    assert path.stat().st_size > 10_000 and fig['gaps'] == [{'station_mm': 0.0, 'length_mm': pytest.approx(1200.0)}]
 
 
 def test_projection_and_closure_helpers():

@@ -150,6 +150,7 @@ def bead_quality(points: np.ndarray, widths: np.ndarray, heights: np.ndarray, ti
         empty = StationProfile(np.arange(0.0, length, step), np.zeros(int(np.ceil(length / step))),
                                np.zeros(int(np.ceil(length / step)), dtype=int))
         return {'deposit_points': int(wet.sum()), 'line_length_mm': 1e3 * length, 'gap_length_mm': 1e3 * length,
+                'gaps': [{'station_mm': 0.0, 'length_mm': 1e3 * length}], 'blobs': [], 'band': band,
                 'width_within_band_fraction': 0.0, 'nominal_width_mm': 1e3 * nominal_width}, empty
 
     if not np.any(wet):
