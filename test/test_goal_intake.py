@@ -1,5 +1,6 @@
 """FollowJointTrajectory goal requests taken straight into arrays: same content as rclpy's conversion, over DDS."""
 import ctypes
+from contextlib import contextmanager
 
 import numpy as np
 import pytest
@@ -109,24 +110,31 @@ class _Server:
         return FollowJointTrajectory.Result(error_string=f'{len(handle.request.trajectory.points)} points')
 
 
-def test_goals_arrive_as_arrays_over_dds_and_end_as_usual():
+@contextmanager
+def _served():
+    """(server, client, executor): the array-taking server and a plain client over DDS, the server ready."""
     with ros_context() as ctx:
         server_node, client_node = Node('intake_server', context=ctx), Node('intake_client', context=ctx)
         server = _Server(server_node)
         client = ActionClient(client_node, FollowJointTrajectory, 'fjt')
         with executor_with(ctx, server_node, client_node) as ex:
             spin_until(ex, client.server_is_ready, 10.0, 'the action server')
-            for count in (20_000, 3):
-                sent = goal(count)
-                handle = spin_until_future(ex, client.send_goal_async(sent), 30.0, 'the goal response')
-                assert handle.accepted
-                result = spin_until_future(ex, handle.get_result_async(), 10.0, 'the result')
-                assert result.status == GoalStatus.STATUS_SUCCEEDED
-                assert result.result.error_string == '0 points'  # the goal handle's request has none
-                got = server.goals[-1]
-                assert got.trajectory.points == [] and list(got.trajectory.joint_names) == JOINTS
-                assert got.goal_tolerance == sent.goal_tolerance and got.path_tolerance == sent.path_tolerance
-                assert_same(server.arrays[-1], expected_arrays(sent))
+            yield server, client, ex
+
+
+def test_goals_arrive_as_arrays_over_dds_and_end_as_usual():
+    with _served() as (server, client, ex):
+        for count in (20_000, 3):
+            sent = goal(count)
+            handle = spin_until_future(ex, client.send_goal_async(sent), 30.0, 'the goal response')
+            assert handle.accepted
+            result = spin_until_future(ex, handle.get_result_async(), 10.0, 'the result')
+            assert result.status == GoalStatus.STATUS_SUCCEEDED
+            assert result.result.error_string == '0 points'  # the goal handle's request has none
+            got = server.goals[-1]
+            assert got.trajectory.points == [] and list(got.trajectory.joint_names) == JOINTS
+            assert got.goal_tolerance == sent.goal_tolerance and got.path_tolerance == sent.path_tolerance
+            assert_same(server.arrays[-1], expected_arrays(sent))
 
 
 def test_a_failed_read_falls_back_to_rclpys_conversion(monkeypatch):
@@ -134,16 +142,11 @@ def test_a_failed_read_falls_back_to_rclpys_conversion(monkeypatch):
         raise ValueError('broken on purpose')
 
     monkeypatch.setattr(intake_module, 'read_joint_trajectory', broken)
-    with ros_context() as ctx:
-        server_node, client_node = Node('intake_server', context=ctx), Node('intake_client', context=ctx)
-        server = _Server(server_node)
-        client = ActionClient(client_node, FollowJointTrajectory, 'fjt')
-        with executor_with(ctx, server_node, client_node) as ex:
-            spin_until(ex, client.server_is_ready, 10.0, 'the action server')
-            sent = goal(50)
-            handle = spin_until_future(ex, client.send_goal_async(sent), 30.0, 'the goal response')
-            assert handle.accepted
-            result = spin_until_future(ex, handle.get_result_async(), 10.0, 'the result')
+    with _served() as (server, client, ex):
+        sent = goal(50)
+        handle = spin_until_future(ex, client.send_goal_async(sent), 30.0, 'the goal response')
+        assert handle.accepted
+        result = spin_until_future(ex, handle.get_result_async(), 10.0, 'the result')
     assert result.result.error_string == '50 points'
     assert server.arrays == [None] and server.goals[0].trajectory == sent.trajectory
     assert 'broken on purpose' in goal_intake().failed

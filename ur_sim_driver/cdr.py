@@ -34,23 +34,18 @@ def parse_joint_trajectory(data: bytes) -> CommandArrays:
         raise TrajectoryError(f'malformed JointTrajectory message ({len(data)} bytes): {exc}') from None
 
 
-def _parse(data: bytes) -> CommandArrays:
-    if len(data) < _HEADER or data[1] not in (0, 1):
-        raise ValueError('not CDR: unknown encapsulation header')
-    order = '<' if data[1] == 1 else '>'
+def align(pos: int, size: int) -> int:
+    """`pos` rounded up to a multiple of `size` [bytes], counted from the end of the encapsulation header."""
+    return pos + (-(pos - _HEADER)) % size
+
+
+def read_prefix(data: bytes, order: str) -> tuple[int, int, list[str], int, int]:
+    """What precedes the points of a serialized JointTrajectory in byte order `order` ('<' or '>'):
+    header.stamp (sec, nanosec), joint_names, the point count and the byte offset of the first point."""
     u32 = struct.Struct(order + 'I').unpack_from
-    time = struct.Struct(order + 'iI').unpack_from
-    f8 = np.dtype(order + 'f8')
-    pos = _HEADER
-
-    def align(p: int, size: int) -> int:
-        return p + (-(p - _HEADER)) % size
-
-    sec, nanosec = time(data, pos)
-    pos += 8
-    (length,) = u32(data, pos)
-    pos += 4 + length
-    pos = align(pos, 4)
+    sec, nanosec = struct.Struct(order + 'iI').unpack_from(data, _HEADER)
+    (length,) = u32(data, _HEADER + 8)  # header.frame_id (not kept)
+    pos = align(_HEADER + 12 + length, 4)
     (name_count,) = u32(data, pos)
     pos += 4
     names = []
@@ -61,7 +56,17 @@ def _parse(data: bytes) -> CommandArrays:
         pos += 4 + length
     pos = align(pos, 4)
     (count,) = u32(data, pos)
-    pos += 4
+    return sec, nanosec, names, count, pos + 4
+
+
+def _parse(data: bytes) -> CommandArrays:
+    if len(data) < _HEADER or data[1] not in (0, 1):
+        raise ValueError('not CDR: unknown encapsulation header')
+    order = '<' if data[1] == 1 else '>'
+    u32 = struct.Struct(order + 'I').unpack_from
+    time = struct.Struct(order + 'iI').unpack_from
+    f8 = np.dtype(order + 'f8')
+    sec, nanosec, names, count, pos = read_prefix(data, order)
     sizes = np.zeros((count, 4), dtype=np.int64)
     starts = np.zeros((count, 4), dtype=np.int64)  # byte offset of each array's first element
     stamps = np.zeros((count, 2), dtype=np.int64)

@@ -15,7 +15,7 @@ import struct
 
 import numpy as np
 
-from ur_sim_driver.cdr import parse_joint_trajectory
+from ur_sim_driver.cdr import align, parse_joint_trajectory, read_prefix
 from ur_sim_driver.command_arrays import CommandArrays
 
 _HEADER = 4  # encapsulation header; alignment counts from its end
@@ -35,8 +35,6 @@ def read_joint_trajectory(data: bytes) -> CommandArrays:
     return regular if regular is not None else parse_joint_trajectory(data)
 
 
-def _align(pos: int, size: int) -> int:
-    return pos + (-(pos - _HEADER)) % size
 
 
 class _Layout:
@@ -48,16 +46,16 @@ class _Layout:
         self.count_at = [0, 0, 0, 0]  # offset of each field's uint32 length
         self.values_at = [0, 0, 0, 0]  # offset of each field's first value (when it has any)
         for field in range(4):
-            pos = _align(pos, 4)
+            pos = align(pos, 4)
             self.count_at[field] = pos - start
             (m,) = u32(data, pos)
             pos += 4
             if m:
-                pos = _align(pos, 8)
+                pos = align(pos, 8)
                 self.values_at[field] = pos - start
                 self.sizes[field] = m
                 pos += 8 * m
-        pos = _align(pos, 4)
+        pos = align(pos, 4)
         self.time_at = pos - start
         self.end = pos + 8
 
@@ -68,22 +66,7 @@ def _read_regular(data: bytes) -> CommandArrays | None:
     order = '<' if data[1] == 1 else '>'
     u32 = struct.Struct(order + 'I').unpack_from
     stamp = struct.Struct(order + 'iI').unpack_from
-    pos = _HEADER
-    sec, nanosec = stamp(data, pos)
-    pos += 8
-    (length,) = u32(data, pos)  # header.frame_id (not kept)
-    pos = _align(pos + 4 + length, 4)
-    (name_count,) = u32(data, pos)
-    pos += 4
-    names = []
-    for _ in range(name_count):
-        pos = _align(pos, 4)
-        (length,) = u32(data, pos)
-        names.append(bytes(data[pos + 4:pos + 3 + length]).decode())
-        pos += 4 + length
-    pos = _align(pos, 4)
-    (count,) = u32(data, pos)
-    pos += 4
+    sec, nanosec, names, count, pos = read_prefix(data, order)
     if count < _MIN_POINTS:
         return None
     # The first two points are read one by one: where the first ends decides the padding of the second; from
