@@ -103,6 +103,11 @@ def test_the_prototype_is_left_as_it_was() -> None:
     assert msg.position.tolist() == [1.0] * 6 and msg.header.stamp.sec == 5
 
 
+def test_publish_needs_a_publisher() -> None:
+    with pytest.raises(UrSimError, match='without a publisher'):
+        CdrTemplate(Float64(), floats=('data',)).publish((1.0,))
+
+
 def test_unknown_field_is_named() -> None:
     with pytest.raises(UrSimError, match="'pose.positon.x'"):
         CdrTemplate(PoseStamped(), floats=('pose.positon.x',))

@@ -120,19 +120,21 @@ class CdrTemplate:
     def render(self, values: np.ndarray | Sequence[float], stamp: tuple[int, int] | None = None) -> bytes:
         """The message's bytes with `values` (the float fields flattened, in order) and every stamp set to `stamp`
         (sec, nanosec); a stamp not given keeps its last value."""
-        if self.size:
-            self._doubles[self._double_index] = values
-        if stamp is not None and self.stamp_count:
-            self._words[self._word_index] = stamp * self.stamp_count
+        self._patch(values, stamp)
         return bytes(self._buffer)
 
     def publish(self, values: np.ndarray | Sequence[float], stamp: tuple[int, int] | None = None) -> None:
         """Render (see `render`) and publish on the template's publisher."""
+        if self._publish_raw is None:
+            raise UrSimError('this CdrTemplate was made without a publisher: use render()')
+        self._patch(values, stamp)
+        self._publish_raw(bytes(self._buffer))
+
+    def _patch(self, values: np.ndarray | Sequence[float], stamp: tuple[int, int] | None) -> None:
         if self.size:
             self._doubles[self._double_index] = values
         if stamp is not None and self.stamp_count:
             self._words[self._word_index] = stamp * self.stamp_count
-        self._publish_raw(bytes(self._buffer))
 
 
 def raw_publish(publisher: Publisher) -> Callable[[bytes], None]:
