@@ -25,12 +25,17 @@ def test_gravity_compensated_arm_stays():
     assert np.abs(sim.state().q - POSE).max() < 1e-4
 
 
-def test_a_push_moves_it_and_the_damping_stops_it():
-    sim = make()
+def push(sim, seconds: float) -> None:
+    """Push wrist_3 sideways with 30 N for `seconds` [s] of free motion, then let go."""
     body = sim.physics.body_id('wrist_3_link')
     sim.physics.set_external_wrench(body, np.array([0.0, 30.0, 0.0]), np.zeros(3))
-    run_free(sim, 0.5)
+    run_free(sim, seconds)
     sim.physics.set_external_wrench(body, np.zeros(3), np.zeros(3))
+
+
+def test_a_push_moves_it_and_the_damping_stops_it():
+    sim = make()
+    push(sim, 0.5)
     moved = np.abs(sim.state().q - POSE).max()
     assert moved > 0.05
     run_free(sim, 2.0)
@@ -60,10 +65,7 @@ def test_limits_hold_in_freedrive():
 
 def test_position_control_resumes_without_a_jump():
     sim = make()
-    body = sim.physics.body_id('wrist_3_link')
-    sim.physics.set_external_wrench(body, np.array([0.0, 30.0, 0.0]), np.zeros(3))
-    run_free(sim, 0.3)
-    sim.physics.set_external_wrench(body, np.zeros(3), np.zeros(3))
+    push(sim, 0.3)
     run_free(sim, 1.5)  # the damping slows it
     q = sim.state().q
     zero = np.zeros(6)
