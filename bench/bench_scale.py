@@ -58,12 +58,12 @@ def run_batch(n: int) -> dict:
         for d in domains:
             d.clock()  # every simulator is up before the jobs start
         with tempfile.TemporaryDirectory() as tmp:
-            logs = [open(Path(tmp) / f'job{k}.err', 'w+') for k in range(n)]
+            logs = [open(Path(tmp) / f'job{k}.log', 'w+') for k in range(n)]
             t0 = time.perf_counter()
             starts = [d.clock() for d in domains]
             jobs = [subprocess.Popen(['ur_glue_planner', '--ros-args', '-p', f'out_dir:={tmp}/job{k}',
                                       '-p', 'render:=false', '-p', 'video:=false'],
-                                     env=d.env, stdout=subprocess.DEVNULL, stderr=log,
+                                     env=d.env, stdout=log, stderr=subprocess.STDOUT,
                                      cwd=tmp)
                     for k, (d, log) in enumerate(zip(domains, logs))]
             results = []
@@ -71,10 +71,10 @@ def run_batch(n: int) -> dict:
                 code = job.wait(timeout=900)
                 w1, s1 = d.clock()
                 result = {'exit_code': code, 'wall_s': w1 - w0, 'sim_s': s1 - s0, 'rtf': (s1 - s0) / (w1 - w0)}
-                if code != 0:  # what the planner said last
+                if code != 0:  # what the planner printed last
                     log = logs[len(results)]
                     log.seek(0)
-                    result['stderr_tail'] = log.read()[-1500:]
+                    result['output_tail'] = log.read()[-1500:]
                 results.append(result)
             for log in logs:
                 log.close()
