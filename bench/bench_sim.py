@@ -11,7 +11,6 @@ import signal
 import subprocess
 import sys
 import tempfile
-import threading
 import time
 from pathlib import Path
 
@@ -33,6 +32,7 @@ from ur_glue_planner.execution.action_client import ActionClient
 from ur_sim_driver.jtc import TrajectoryController
 from ur_sim_driver.sim_config import sim_config_from_params
 from ur_sim_driver.simulator import Simulator
+from ur_sim_driver.spin_thread import SpinThread
 from ur_sim_driver.tolerances import default_tolerances
 from ur_sim_driver.trajectory_types import TrajectoryCommand
 from ur_sim_driver.validation import map_to_config_order
@@ -70,12 +70,10 @@ class _Probe:
         self.node = Node('bench_probe', context=self.ctx)
         self.executor = SingleThreadedExecutor(context=self.ctx)
         self.executor.add_node(self.node)
-        self.thread = threading.Thread(target=self.executor.spin, daemon=True)
-        self.thread.start()
+        self.spinner = SpinThread(self.executor, 'bench_probe').start()
 
     def close(self) -> None:
-        self.executor.shutdown(timeout_sec=2.0)
-        self.thread.join(timeout=5.0)
+        self.spinner.stop()
         self.node.destroy_node()
         rclpy.try_shutdown(context=self.ctx)
 

@@ -1,7 +1,6 @@
 """An in-process ur_sim node plus a client node on a private context, spun by a background executor."""
 from __future__ import annotations
 
-import threading
 import time
 from collections.abc import Iterator
 from contextlib import contextmanager
@@ -25,6 +24,7 @@ from trajectory_msgs.msg import JointTrajectory, JointTrajectoryPoint
 
 from ur_glue_planner.execution.action_client import ActionClient
 from ur_sim_driver.node import UrSimNode
+from ur_sim_driver.spin_thread import SpinThread
 
 TIMEOUT = 30.0  # [s] wall-clock deadline of any single wait
 
@@ -73,10 +73,9 @@ class Recording:
 class SimHarness:
     """Client-side helpers against a running ur_sim."""
 
-    def __init__(self, sim: UrSimNode, client: Node, executor: MultiThreadedExecutor) -> None:
+    def __init__(self, sim: UrSimNode, client: Node) -> None:
         self.sim = sim
         self.client = client
-        self.executor = executor
         p = sim.cfg.prefixed
         ctrl = sim.cfg.controller_name
         self.joints = list(sim.sim.joint_names)
@@ -135,9 +134,7 @@ class SimHarness:
             node.create_subscription(Float64, self._scaling_topic, self._on_scaling, QoSProfile(depth=1000))
             executor = SingleThreadedExecutor(context=self.client.context)
             executor.add_node(node)
-            thread = threading.Thread(target=executor.spin, daemon=True)
-            thread.start()
-            self._recorder = (node, executor, thread)
+            self._recorder = (node, SpinThread(executor, 'test_recorder').start())
             wait_for(lambda: self.recording.t, what='the first recorded joint state')
             self.recording = Recording()
         return self.recording
@@ -152,16 +149,13 @@ class SimHarness:
         node.create_subscription(msg_type, topic, callback, QoSProfile(depth=depth, durability=durability))
         executor = SingleThreadedExecutor(context=self.client.context)
         executor.add_node(node)
-        thread = threading.Thread(target=executor.spin, daemon=True)
-        thread.start()
-        self._listeners.append((node, executor, thread))
+        self._listeners.append((node, SpinThread(executor, node.get_name()).start()))
 
     def close(self) -> None:
         """Stop recording and listening."""
         self.stop_recording()
-        for node, executor, thread in self._listeners:
-            executor.shutdown(timeout_sec=2.0)
-            thread.join(timeout=5.0)
+        for node, spinner in self._listeners:
+            spinner.stop()
             node.destroy_node()
         self._listeners.clear()
 
@@ -169,9 +163,8 @@ class SimHarness:
         """Stop recording and return what was recorded."""
         rec, self.recording = self.recording, None  # the callback stops appending at once
         if self._recorder is not None:
-            node, executor, thread = self._recorder
-            executor.shutdown(timeout_sec=2.0)
-            thread.join(timeout=5.0)
+            node, spinner = self._recorder
+            spinner.stop()
             node.destroy_node()
             self._recorder = None
         return rec
@@ -241,18 +234,16 @@ def running_sim(**params) -> Iterator[SimHarness]:
         for node in sim.nodes():
             executor.add_node(node)
         executor.add_node(client)
-        thread = threading.Thread(target=executor.spin, daemon=True)
-        thread.start()
+        spinner = SpinThread(executor, 'test_executor').start()
         harness = None
         try:
-            harness = SimHarness(sim, client, executor)
+            harness = SimHarness(sim, client)
             yield harness
         finally:
             if harness is not None:
                 harness.close()
             sim.shutdown()
-            executor.shutdown(timeout_sec=2.0)
-            thread.join(timeout=5.0)
+            spinner.stop()
             client.destroy_node()
             sim.destroy_node()
             rclpy.try_shutdown(context=ctx)

@@ -35,6 +35,7 @@ from ur_glue_planner.errors import ClientError
 from ur_glue_planner.execution import ros_conversions as conv
 from ur_glue_planner.execution.action_client import ActionClient
 from ur_glue_planner.motion.kinematics import IkResult, Kinematics
+from ur_sim_driver.spin_thread import SpinThread
 
 DEFAULT_CONTROLLER = 'scaled_joint_trajectory_controller'
 STATUS_NAMES = {GoalStatus.STATUS_SUCCEEDED: 'succeeded', GoalStatus.STATUS_ABORTED: 'aborted',
@@ -195,8 +196,7 @@ class URClient:
         self._action = ActionClient(self.node, FollowJointTrajectory, self.action_name)
         self._executor = SingleThreadedExecutor(context=context)
         self._executor.add_node(self.node)
-        self._thread = threading.Thread(target=self._executor.spin, daemon=True)
-        self._thread.start()
+        self._spinner = SpinThread(self._executor, 'ur_client').start()
         try:
             _wait(self._action.server_is_ready, timeout, f'FollowJointTrajectory server {self.action_name} not found')
             _wait(lambda: self._latest is not None, timeout, f'no joint states on {prefix}/joint_states')
@@ -369,8 +369,7 @@ class URClient:
     # ---- lifetime --------------------------------------------------------------------------------
     def close(self) -> None:
         """Stop spinning and release the node (and the private context)."""
-        self._executor.shutdown(timeout_sec=2.0)
-        self._thread.join(timeout=5.0)
+        self._spinner.stop()
         self.node.destroy_node()
         if self._own_context:
             rclpy.try_shutdown(context=self.context)

@@ -27,6 +27,7 @@ from ur_glue_planner.execution.dispenser_io import DispenserIO
 from ur_glue_planner.execution.run import Interrupted, describe, execute
 from ur_glue_planner.job import GlueJob
 from ur_glue_planner.motion.plan import GluePlan, plan_job
+from ur_sim_driver.spin_thread import SpinThread
 
 
 @dataclass(frozen=True)
@@ -76,8 +77,7 @@ class LiveRobot:
         self.bead_listener = BeadListener(self.node)
         self._executor = SingleThreadedExecutor(context=context)
         self._executor.add_node(self.node)
-        self._thread = threading.Thread(target=self._executor.spin, daemon=True)
-        self._thread.start()
+        self._spinner = SpinThread(self._executor, 'studio_ros').start()
         self._run_thread: threading.Thread | None = None
         self._stop = threading.Event()
 
@@ -163,8 +163,7 @@ class LiveRobot:
         """Stop a run, stop spinning, release the node (and the private context)."""
         if self.running:
             self.stop_run()
-        self._executor.shutdown(timeout_sec=2.0)
-        self._thread.join(timeout=5.0)
+        self._spinner.stop()
         self.node.destroy_node()
         if self._own_context:
             rclpy.try_shutdown(context=self.context)

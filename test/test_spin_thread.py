@@ -1,0 +1,52 @@
+"""SpinThread: callbacks run while it spins, and stop() ends the thread before the executor is destroyed."""
+import threading
+
+import pytest
+from rclpy.executors import MultiThreadedExecutor, SingleThreadedExecutor
+from rclpy.node import Node
+from ros_helpers import ros_context
+from std_msgs.msg import Int32
+
+from ur_sim_driver.spin_thread import SpinThread
+
+# An exception in the spin thread (the race this class exists to avoid) fails the test.
+pytestmark = pytest.mark.filterwarnings('error::pytest.PytestUnhandledThreadExceptionWarning')
+
+
+def _pub_sub(ctx, executor_cls):
+    received = []
+    got = threading.Event()
+    node = Node('spin_thread_test', context=ctx)
+    pub = node.create_publisher(Int32, 'spin_thread_topic', 10)
+
+    def on_msg(msg):
+        received.append(msg.data)
+        got.set()
+    node.create_subscription(Int32, 'spin_thread_topic', on_msg, 10)
+    executor = executor_cls(context=ctx)
+    executor.add_node(node)
+    return node, pub, executor, received, got
+
+
+@pytest.mark.parametrize('executor_cls', [SingleThreadedExecutor, MultiThreadedExecutor])
+def test_callbacks_run_and_stop_joins_before_shutdown(executor_cls):
+    with ros_context() as ctx:
+        node, pub, executor, received, got = _pub_sub(ctx, executor_cls)
+        spinner = SpinThread(executor, 'test').start()
+        for i in range(200):  # publish until the subscription has matched and one message arrived
+            pub.publish(Int32(data=i))
+            if got.wait(0.05):
+                break
+        assert received, 'no message was delivered while spinning'
+        assert spinner.stop(timeout=5.0)
+        assert not spinner.running
+        node.destroy_node()
+
+
+def test_stop_after_the_context_is_shut_down_returns():
+    with ros_context() as ctx:
+        node, _, executor, _, _ = _pub_sub(ctx, SingleThreadedExecutor)
+        spinner = SpinThread(executor).start()
+        ctx.try_shutdown()
+        assert spinner.stop(timeout=5.0)
+        node.destroy_node()
