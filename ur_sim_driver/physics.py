@@ -8,6 +8,7 @@ import mujoco
 import numpy as np
 
 from ur_sim_driver.errors import ConfigError
+from ur_sim_driver.mj_readout import read_dynamics, read_joints, read_pose
 from ur_sim_driver.safety import Contact
 
 
@@ -28,7 +29,6 @@ class ArmState:
     effort: np.ndarray
 
 
-_XYZW = np.array([1, 2, 3, 0])  # MuJoCo's (w, x, y, z) in ROS's order
 
 
 def _as_slice(index: list[int]) -> slice | np.ndarray:
@@ -77,7 +77,6 @@ class ArmPhysics:
         self._base = lookup(mujoco.mjtObj.mjOBJ_BODY, base_body, 'body')
         self._tcp = lookup(mujoco.mjtObj.mjOBJ_SITE, tcp_site, 'site')
         self._mass = np.zeros((m.nv, m.nv))
-        self._mass_index = (self._dof, self._dof) if isinstance(self._dof, slice) else np.ix_(self._dof, self._dof)
         self._payload = lookup(mujoco.mjtObj.mjOBJ_BODY, payload_body, 'body')
         sensors = [lookup(mujoco.mjtObj.mjOBJ_SENSOR, s, 'sensor') for s in ft_sensors]
         self._ft = _as_slice([int(m.sensor_adr[s]) + k for s in sensors for k in range(3)])
@@ -96,9 +95,12 @@ class ArmPhysics:
         self._d_qpos, self._d_qvel, self._d_ctrl = d.qpos, d.qvel, d.ctrl
         self._d_actuator_force, self._d_bias, self._d_passive = d.actuator_force, d.qfrc_bias, d.qfrc_passive
         self._d_sensordata = d.sensordata
-        self._tcp_pos, self._tcp_mat = d.site_xpos[self._tcp], d.site_xmat[self._tcp].reshape(3, 3)
+        self._tcp_pos, self._tcp_mat9 = d.site_xpos[self._tcp], d.site_xmat[self._tcp]
         self._base_pos, self._base_mat9 = d.xpos[self._base], d.xmat[self._base]
-        self._base_mat = self._base_mat9.reshape(3, 3)
+        # The readout kernels (mj_readout.py) take index arrays.
+        self._i_qpos = np.array([int(m.jnt_qposadr[j]) for j in jids], dtype=np.int64)
+        self._i_dof = np.array([int(m.jnt_dofadr[j]) for j in jids], dtype=np.int64)
+        self._i_act = np.array([self._actuator_for(j) for j in jids], dtype=np.int64)
 
     def _actuator_for(self, joint_id: int) -> int:
         m = self.model
@@ -122,8 +124,9 @@ class ArmPhysics:
 
     def state(self) -> ArmState:
         """The arm's measured state now."""
-        return ArmState(self.data.time, self._d_qpos[self._qpos].copy(), self._d_qvel[self._dof].copy(),
-                        self._d_actuator_force[self._act].copy())
+        out = np.empty((3, len(self._i_qpos)))
+        read_joints(self._d_qpos, self._d_qvel, self._d_actuator_force, self._i_qpos, self._i_dof, self._i_act, out)
+        return ArmState(self.data.time, out[0], out[1], out[2])
 
     def positions(self) -> np.ndarray:
         """(n,) joint positions now [rad]."""
@@ -132,9 +135,10 @@ class ArmPhysics:
     def dynamics(self) -> tuple[np.ndarray, np.ndarray]:
         """M(q) (n, n) [kg m^2] and h(q, qd) = gravity + Coriolis - passive (n,) [N m] at the current state."""
         mujoco.mj_fullM(self.model, self.data, self._mass)
-        dof = self._dof
-        bias = self._d_bias[dof] - self._d_passive[dof]
-        return self._mass[self._mass_index].copy(), bias
+        n = len(self._i_dof)
+        mass, bias = np.empty((n, n)), np.empty(n)
+        read_dynamics(self._mass, self._d_bias, self._d_passive, self._i_dof, mass, bias)
+        return mass, bias
 
     def step(self, tau: np.ndarray) -> None:
         """Apply joint torques `tau` (n,) [N m] for one control period (zero-order hold)."""
@@ -165,13 +169,9 @@ class ArmPhysics:
 
     def tcp_pose(self) -> tuple[np.ndarray, np.ndarray]:
         """TCP pose in the base frame: position (3,) [m] and quaternion (4,) as (x, y, z, w)."""
-        # MuJoCo's 3-vector and 3x3 routines: a third cheaper than numpy's for arrays this small.
-        offset, p, r, wxyz = np.empty(3), np.empty(3), np.empty(9), np.empty(4)
-        mujoco.mju_sub3(offset, self._tcp_pos, self._base_pos)
-        mujoco.mju_mulMatTVec3(p, self._base_mat9, offset)
-        mujoco.mju_mulMatTMat(r.reshape(3, 3), self._base_mat, self._tcp_mat)
-        mujoco.mju_mat2Quat(wxyz, r)
-        return p, wxyz[_XYZW]
+        out = np.empty(7)
+        read_pose(self._tcp_pos, self._tcp_mat9, self._base_pos, self._base_mat9, out)
+        return out[:3], out[3:]
 
     def wrench(self) -> np.ndarray:
         """(6,) force [N] and torque [N m] that the bodies beyond tool0 (tool, payload) exert on the arm,

@@ -12,12 +12,13 @@ from ur_sim_driver.description.tool import get_tool
 from ur_sim_driver.description.urdf import build_urdf
 from ur_sim_driver.errors import ConfigError
 from ur_sim_driver.io_bank import IoBank
+from ur_sim_driver.joint_control import JointControl
 from ur_sim_driver.payload import NO_PAYLOAD, Payload, make_payload
 from ur_sim_driver.physics import ArmPhysics, ArmState
 from ur_sim_driver.scene import load_scene, pose_matrix
-from ur_sim_driver.servo import JointServo, ServoLimits, Setpoint
+from ur_sim_driver.servo import JointServo, Setpoint
 from ur_sim_driver.sim_config import SimConfig
-from ur_sim_driver.torque_control import PdGains, computed_torque
+from ur_sim_driver.torque_control import PdGains
 from ur_sim_driver.trajectory import TrajectorySample
 
 MAX_PHYSICS_STEP = 0.002  # [s] automatic substeps keep the physics step at or below this
@@ -73,11 +74,12 @@ class Simulator:
         self.gains = PdGains.critically_damped(len(q0), self.control_rate)
         self.servo = JointServo(q0, self.control_rate)
         self.a_max = np.full(len(q0), self.params.a_max)
-        # The servo's limit terms that do not change (advance() runs every control cycle).
-        self._effort_share = EFFORT_SHARE * self.params.effort_max
-        self._a_floor, self._a_follow = 0.05 * self.a_max, ACCEL_SLACK * self.a_max
-        self._a_brake = BRAKE_CAPABILITY * self.a_max
-        self.last_setpoint: Setpoint | None = None
+        p = self.params
+        self.control = JointControl(self.servo, self.gains, p.v_max, p.effort_max, p.q_min, p.q_max,
+                                    effort_share=EFFORT_SHARE * p.effort_max, a_floor=0.05 * self.a_max,
+                                    a_follow=ACCEL_SLACK * self.a_max, a_brake=BRAKE_CAPABILITY * self.a_max,
+                                    dt=self.control_dt)
+        self._servo_active = False  # the servo made the last cycle's setpoint (not freedrive, not before any)
         # The robot's IO (immutable; replaced under the simulation lock, read as one snapshot without it).
         self.io = IoBank()
         self.payload: Payload = NO_PAYLOAD
@@ -98,19 +100,18 @@ class Simulator:
         The robot's servo turns the reference into a setpoint within the joint limits (``servo.py``), never
         passing `stop` (n,) [rad]; the computed-torque controller tracks the setpoint.
         """
-        p = self.params
         mass, bias = self.physics.dynamics()
-        # What the joints can accelerate at now: the type's limit, or less where the effort limit (after
-        # gravity and Coriolis torques) allows less. The diagonal of M is the joint's own inertia.
-        reachable = np.maximum((self._effort_share - np.abs(bias)) / mass.diagonal(), self._a_floor)
-        limits = ServoLimits(p.v_max, np.minimum(reachable, self._a_follow), np.minimum(reachable, self._a_brake),
-                             p.q_min, p.q_max)
-        sp = self.servo.step(ref.positions, ref.velocities, ref.accelerations, self.control_dt, limits, stop)
-        self.last_setpoint = sp
-        tau, _ = computed_torque(mass, bias, state.q, state.qd, sp.positions, sp.velocities, sp.accelerations,
-                                 self.gains, p.effort_max, p.v_max, self.control_dt)
+        # The joints' reachable accelerations, the servo and the computed torques: one compiled call.
+        tau = self.control.torques(mass, bias, state.q, state.qd, ref.positions, ref.velocities,
+                                   ref.accelerations, stop)
+        self._servo_active = True
         self.physics.step(tau)
         return tau
+
+    @property
+    def last_setpoint(self) -> Setpoint | None:
+        """The servo's setpoint of the last cycle (None in freedrive and before the first cycle)."""
+        return self.control.last_setpoint() if self._servo_active else None
 
     def advance_free(self, state: ArmState) -> np.ndarray:
         """Freedrive for one control period: torques that cancel gravity and Coriolis (the model's bias) with light
@@ -130,7 +131,7 @@ class Simulator:
         self.physics.step(tau)
         after = self.physics.state()
         self.servo.reset(after.q, after.qd)
-        self.last_setpoint = None
+        self._servo_active = False
         return tau
 
     def tcp_pose(self) -> tuple[np.ndarray, np.ndarray]:
