@@ -153,14 +153,24 @@ class SimHarness:
 
     def close(self) -> None:
         """Stop recording and listening."""
-        self.stop_recording()
+        self.stop_recording(catch_up=False)
         for node, spinner in self._listeners:
             spinner.stop()
             node.destroy_node()
         self._listeners.clear()
 
-    def stop_recording(self) -> Recording:
-        """Stop recording and return what was recorded."""
+    def stop_recording(self, catch_up: bool = True) -> Recording:
+        """Stop recording and return what was recorded.
+
+        With `catch_up`, every joint state of the cycles simulated before this call is in the recording: the
+        recorder's own thread may lag the simulation (in fast mode, by many cycles), and what is still on its
+        way is waited for. A goal's result can arrive before the joint states of its last cycles.
+        """
+        rec = self.recording
+        if catch_up and rec is not None and self._recorder is not None:
+            last_cycle = self.sim.sim.time - self.sim.sim.control_dt  # [s] stamp of the last finished cycle
+            wait_for(lambda: bool(rec.t) and rec.t[-1] >= last_cycle - 1e-9,
+                     what=f'the joint state stamped {last_cycle:.3f} s in the recording')
         rec, self.recording = self.recording, None  # the callback stops appending at once
         if self._recorder is not None:
             node, spinner = self._recorder

@@ -122,9 +122,14 @@ def move_and_record(h, rec: TfRecorder, target, duration: float, count: int) -> 
     wait_for(lambda: rec.urdf is not None and rec.static, what='/robot_description and /tf_static')
     handle = h.send(h.goal([point(target, duration, np.zeros(6))]))
     assert handle.accepted
-    with rec.lock:
-        start = len(rec.joint_stamps)
-    wait_for(lambda: len(rec.joint_stamps) >= start + count, what=f'{count} /tf messages of the arm joints')
+    # Counted by stamp, not by arrival: the listeners' threads may still be delivering older /tf messages.
+    accepted_ns = round(h.sim.sim.time * 1e9)
+
+    def after() -> int:
+        with rec.lock:
+            return sum(s > accepted_ns and s in rec.q for s in rec.joint_stamps)
+    wait_for(lambda: after() >= count,
+             what=f'{count} /tf messages of the arm joints, and their joint states, after the goal was accepted')
 
 
 def test_tf_equals_forward_kinematics_of_the_joint_states():
