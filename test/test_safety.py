@@ -2,7 +2,7 @@
 import numpy as np
 import pytest
 
-from ur_sim_driver.safety import LIMIT_MARGIN, Contact, contact_cause, limit_cause
+from ur_sim_driver.safety import LIMIT_MARGIN, Contact, any_outside, contact_cause, limit_cause
 from ur_sim_driver.sim_config import sim_config_from_params
 from ur_sim_driver.simulator import Simulator
 
@@ -53,3 +53,13 @@ def test_no_contacts_at_the_default_start_with_the_windshield():
     sim = Simulator(sim_config_from_params({'tool': 'dispenser', 'scene': 'windshield'}))
     sim.physics.step(np.zeros(6))
     assert sim.physics.contacts() == ()
+
+
+def test_any_outside_checks_both_bounds_of_every_element():
+    lo, hi = np.array([-1.0, -2.0, -3.0]), np.array([1.0, 2.0, 3.0])
+    assert not any_outside(np.array([1.0, -2.0, 0.0]), lo, hi)  # on a bound is inside
+    assert any_outside(np.array([0.0, 0.0, 3.0 + 1e-12]), lo, hi)
+    assert any_outside(np.array([0.0, -2.0 - 1e-12, 0.0]), lo, hi)
+    frozen = np.array([0.0, 5.0, 0.0])
+    frozen.flags.writeable = False  # a trajectory's arrays are read-only
+    assert any_outside(frozen, lo, hi)

@@ -16,6 +16,9 @@ from __future__ import annotations
 from dataclasses import dataclass
 
 import numpy as np
+from numba import njit
+
+from ur_sim_driver.numba_types import B1, IN1
 
 DEFAULT_CONTACT_FORCE = 50.0  # [N] contact force that triggers a protective stop
 LIMIT_MARGIN = 1e-3  # [rad] a joint this close to a limit the reference lies beyond is "in" the limit
@@ -58,8 +61,8 @@ def limit_cause(q: np.ndarray, reference: np.ndarray, q_min: np.ndarray, q_max: 
         q_min, q_max: (n,) position limits [rad].
         joint_names: n names, for the message.
     """
-    # Commands within the limits, the case of every cycle, are ruled out with one comparison.
-    if max(np.maximum(reference - q_max, q_min - reference).tolist()) <= 0.0:
+    # Commands within the limits, the case of every cycle, are ruled out by one compiled call.
+    if not any_outside(reference, q_min, q_max):
         return None
     upper = (reference > q_max) & (q >= q_max - LIMIT_MARGIN)
     lower = (reference < q_min) & (q <= q_min + LIMIT_MARGIN)
@@ -70,3 +73,13 @@ def limit_cause(q: np.ndarray, reference: np.ndarray, q_min: np.ndarray, q_max: 
     limit = q_max[i] if upper[i] else q_min[i]
     return (f'{joint_names[i]} driven into its position limit {limit:.4f} rad (position {q[i]:.4f} rad, '
             f'commanded {reference[i]:.4f} rad)')
+
+
+@njit(B1(IN1, IN1, IN1), cache=True)
+def any_outside(x, lo, hi) -> bool:
+    """Whether any x (n,) lies below lo (n,) or above hi (n,)."""
+    for i in range(x.shape[0]):
+        if x[i] < lo[i] or x[i] > hi[i]:
+            return True
+    return False
+

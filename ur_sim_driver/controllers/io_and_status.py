@@ -109,12 +109,21 @@ class IoAndStatusController(Component):
         self._tool_msg = ToolDataMsg()
         self._io_seen: IoBank | None = None
         self._status: RobotStatus | None = None
+        self._key: tuple | None = None  # robot mode, safety mode, program state and program last published
 
     # ---- every cycle (simulation thread) -----------------------------------------------------------
     def update(self, cycle: Cycle) -> None:
         host = self.host
         io = host.sim.io  # one reference read: a consistent snapshot without the lock
-        status = host.robot.status()
+        robot = host.robot
+        key = (robot.robot_mode, robot.safety_mode, robot.program_state, robot.loaded_program)
+        if io is self._io_seen and key == self._key:
+            # Nothing changed since the last cycle (nearly always): the same bytes go out again.
+            self._publish_io(self._io_bytes)
+            self._publish_tool(self._tool_bytes)
+            return
+        self._key = key
+        status = robot.status()
         last = self._status
         if io is not self._io_seen or last is None or status.robot_mode != last.robot_mode:
             self._fill(io, status)
