@@ -139,9 +139,10 @@ class ToolContactController(Component):
             goal = self._goal
             if goal is not None and goal.handle is None:
                 goal.handle = goal_handle
-            else:  # deactivated between acceptance and execution
+            else:  # deactivated between acceptance and execution: nothing will end it, it ends here
                 goal = _Goal(goal_handle)
                 goal.outcome = ABORTED
+                goal.done.set()
         self.node.get_logger().info('Goal accepted.')
         while not goal.done.wait(0.05):
             if not self.host.context.ok():
