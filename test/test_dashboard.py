@@ -118,7 +118,9 @@ def goal_rejected(h, target) -> bool:
     return code == rc.INVALID_GOAL and text.startswith('the controller is not running')
 
 
-def topic_moves_arm(h, target, dt: float = 0.5) -> bool:
+def topic_moves_arm(h, target, dt: float = 2.0) -> bool:
+    """Whether a 0.3 s topic trajectory moves the arm within `dt` [s] of simulated time (long: in fast mode the
+    message may arrive tenths of a simulated second after the publish)."""
     q0 = h.q
     h.topic.publish(trajectory(h.joints, [point(target, 0.3, ZERO)]))
     h.wait_sim_time(dt)
