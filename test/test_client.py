@@ -88,3 +88,32 @@ def test_the_public_import_path_gives_the_same_client():
     from ur_glue_planner.execution import client as impl
     for name in public.__all__:
         assert getattr(public, name) is getattr(impl, name), name
+
+
+def test_a_built_goal_is_stamped_when_sent_and_its_answer_time_kept(sim_and_client):
+    h, ur = sim_and_client
+    q0 = ur.joint_state().q
+    goal = ur.trajectory_goal(q0[None, :] + 0.05, np.zeros((1, 6)), None, [0.5])
+    assert (goal.trajectory.header.stamp.sec, goal.trajectory.header.stamp.nanosec) == (0, 0)
+    answered = len(ur.goal_latencies)
+    start = ur.start_time()
+    handle = ur.send_goal(goal, start_time=start, wait=False)
+    stamp = goal.trajectory.header.stamp
+    assert stamp.sec + stamp.nanosec * 1e-9 == pytest.approx(start, abs=1e-9)
+    assert len(ur.goal_latencies) == answered + 1 and 0.0 < ur.goal_latencies[-1] < 10.0
+    assert handle.wait(timeout=30).succeeded
+
+
+def test_the_spinning_thread_rests_only_while_nothing_runs_or_records(sim_and_client):
+    from ur_glue_planner.execution.client import IDLE_PACE
+    _, ur = sim_and_client
+    assert ur._pace() == IDLE_PACE
+    recorder = ur.start_recording()
+    assert ur._pace() == 0.0  # every message counts while recording
+    wait_for(lambda: recorder.samples, what='a recorded joint state')
+    ur.stop_recording(recorder, raw=True)
+    q0 = ur.joint_state().q
+    goal = ur.send_joint_configuration(q0 + 0.02, end_time=1.0, wait=False)
+    assert ur._pace() == 0.0 or goal.done  # feedback and the result are not held up
+    assert goal.wait(timeout=30).succeeded
+    assert ur._pace() == IDLE_PACE

@@ -1,10 +1,12 @@
 """SpinThread: callbacks run while it spins, and stop() ends the thread before the executor is destroyed."""
 import threading
+import time
 
 import pytest
 from rclpy.executors import MultiThreadedExecutor, SingleThreadedExecutor
 from rclpy.node import Node
 from ros_helpers import ros_context
+from sim_harness import wait_for
 from std_msgs.msg import Int32
 
 from ur_sim_driver.spin_thread import SpinThread
@@ -49,4 +51,25 @@ def test_stop_after_the_context_is_shut_down_returns():
         spinner = SpinThread(executor).start()
         ctx.try_shutdown()
         assert spinner.stop(timeout=5.0)
+        node.destroy_node()
+
+
+def test_pace_rests_after_each_callback_and_stop_cuts_a_rest_short():
+    with ros_context() as ctx:
+        node = Node('spin_thread_pace', context=ctx)
+        ticks = []
+        node.create_timer(0.001, lambda: ticks.append(1))  # always ready: without a rest, ~1000 callbacks/s
+        rests = []
+
+        def pace() -> float:
+            rests.append(len(ticks))
+            return 0.05 if len(ticks) < 5 else 3600.0  # five short rests, then one that only stop() can end
+        executor = SingleThreadedExecutor(context=ctx)
+        executor.add_node(node)
+        spinner = SpinThread(executor, 'paced', pace=pace).start()
+        wait_for(lambda: len(ticks) >= 5, what='five timer callbacks')
+        time.sleep(0.3)  # the wall clock is the subject: 300 more callbacks would run here without the rest
+        # One callback per rest: the thread rests after every callback, and never runs ahead of its pace.
+        assert len(ticks) == 5 and len(rests) == 5
+        assert spinner.stop(timeout=2.0)  # the hour-long rest ends at once
         node.destroy_node()

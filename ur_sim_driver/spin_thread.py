@@ -8,6 +8,7 @@ thread may still be inside a wait. That thread then dies with ``'NoneType' objec
 from __future__ import annotations
 
 import threading
+from collections.abc import Callable
 
 from rclpy.executors import Executor, ExternalShutdownException
 
@@ -15,10 +16,17 @@ WAKE_PERIOD = 1.0  # [s] longest wait of one spin_once; stop() wakes the executo
 
 
 class SpinThread:
-    """Spin `executor` in a daemon thread until stop(); `executor` is shut down by stop()."""
+    """Spin `executor` in a daemon thread until stop(); `executor` is shut down by stop().
 
-    def __init__(self, executor: Executor, name: str = 'spin') -> None:
+    Args:
+        pace: when given, called after each callback; the thread then rests for the time it returns [s] (0: not
+            at all). A subscriber to a simulation running many times faster than real time is never idle, and
+            its thread would otherwise take half of the process's interpreter lock from the thread doing the work.
+    """
+
+    def __init__(self, executor: Executor, name: str = 'spin', pace: Callable[[], float] | None = None) -> None:
         self.executor = executor
+        self._pace = pace
         self._stop = threading.Event()
         self._thread = threading.Thread(target=self._run, name=name, daemon=True)
 
@@ -27,10 +35,14 @@ class SpinThread:
         return self
 
     def _run(self) -> None:
-        executor, context = self.executor, self.executor.context
+        executor, context, pace = self.executor, self.executor.context, self._pace
         try:
             while not self._stop.is_set() and context.ok():
                 executor.spin_once(timeout_sec=WAKE_PERIOD)
+                if pace is not None:
+                    rest = pace()
+                    if rest > 0.0:
+                        self._stop.wait(rest)
         except ExternalShutdownException:
             pass  # the context went first: nothing left to spin
 

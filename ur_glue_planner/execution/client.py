@@ -14,6 +14,7 @@ from __future__ import annotations
 
 import threading
 import time
+import weakref
 from collections import deque
 from collections.abc import Callable, Sequence
 from dataclasses import dataclass
@@ -38,6 +39,7 @@ from ur_glue_planner.motion.kinematics import IkResult, Kinematics
 from ur_sim_driver.spin_thread import SpinThread
 
 DEFAULT_CONTROLLER = 'scaled_joint_trajectory_controller'
+IDLE_PACE = 0.002  # [s] rest of the client's spinning thread after a callback while nothing runs or records
 STATUS_NAMES = {GoalStatus.STATUS_SUCCEEDED: 'succeeded', GoalStatus.STATUS_ABORTED: 'aborted',
                 GoalStatus.STATUS_CANCELED: 'canceled'}
 
@@ -184,6 +186,8 @@ class URClient:
         self._errors: list[tuple[float, str]] = []
         self._urdf: str | None = None
         self._recorders: list[JointStateRecorder] = []
+        #: Wall time [s] from sending each goal to its acceptance or rejection, oldest first.
+        self.goal_latencies: list[float] = []
         self._history: deque[tuple[float, float]] = deque(maxlen=100)  # (wall, stamp) of recent joint states
         self.node.create_subscription(JointState, f'{prefix}/joint_states', self._on_joint_state, QoSProfile(depth=10))
         self.node.create_subscription(Log, '/rosout', self._on_log, QoSProfile(depth=50))
@@ -194,9 +198,10 @@ class URClient:
         self._topic = self.node.create_publisher(conv.JointTrajectory, f'{prefix}/{controller_name}/joint_trajectory',
                                                  10)
         self._action = ActionClient(self.node, FollowJointTrajectory, self.action_name)
+        self._goals: weakref.WeakSet[TrajectoryGoal] = weakref.WeakSet()
         self._executor = SingleThreadedExecutor(context=context)
         self._executor.add_node(self.node)
-        self._spinner = SpinThread(self._executor, 'ur_client').start()
+        self._spinner = SpinThread(self._executor, 'ur_client', pace=self._pace).start()
         try:
             _wait(self._action.server_is_ready, timeout, f'FollowJointTrajectory server {self.action_name} not found')
             _wait(lambda: self._latest is not None, timeout, f'no joint states on {prefix}/joint_states')
@@ -206,6 +211,13 @@ class URClient:
             self.close()
             raise
         self.joint_names = self._latest.names
+
+    def _pace(self) -> float:
+        """Rest [s] of the spinning thread after each callback: none while a goal runs or a recording is on
+        (every message counts then), IDLE_PACE otherwise (joint states stay fresh; the newest ones are kept)."""
+        if self._recorders or any(not g.done for g in list(self._goals)):
+            return 0.0
+        return IDLE_PACE
 
     # ---- state -----------------------------------------------------------------------------------
     def _on_joint_state(self, msg: JointState) -> None:
@@ -332,20 +344,39 @@ class URClient:
         Raises:
             ClientError: the goal was rejected (with the server's logged reason when it gave one) or not answered.
         """
+        goal = self.trajectory_goal(q, qd, qdd, times, path_tolerance, goal_tolerance, goal_time_tolerance)
+        return self.send_goal(goal, start_time, wait, feedback_callback, timeout)
+
+    def trajectory_goal(self, q: np.ndarray, qd: np.ndarray | None, qdd: np.ndarray | None,
+                        times: Sequence[float], path_tolerance: Sequence[JointTolerance] | None = None,
+                        goal_tolerance: Sequence[JointTolerance] | None = None,
+                        goal_time_tolerance: float = 0.0) -> FollowJointTrajectory.Goal:
+        """The FollowJointTrajectory goal of `follow_trajectory` (same arguments), built but not sent; its start
+        stamp is set by `send_goal`."""
         goal = FollowJointTrajectory.Goal()
-        goal.trajectory = conv.joint_trajectory(self.joint_names, times, np.atleast_2d(q), qd, qdd, start_time)
+        goal.trajectory = conv.joint_trajectory(self.joint_names, times, np.atleast_2d(q), qd, qdd)
         goal.path_tolerance = list(path_tolerance or [])
         goal.goal_tolerance = list(goal_tolerance or [])
         goal.goal_time_tolerance = conv.duration(goal_time_tolerance)
+        return goal
+
+    def send_goal(self, goal: FollowJointTrajectory.Goal, start_time: float = 0.0, wait: bool = True,
+                  feedback_callback: Callable | None = None,
+                  timeout: float = 10.0) -> GoalOutcome | TrajectoryGoal:
+        """Stamp a built goal with `start_time` [s of robot time] (0 starts on arrival) and send it; see
+        `follow_trajectory`. Building a long goal takes time, so a start stamped only now keeps its margin."""
+        goal.trajectory.header.stamp = conv.stamp(start_time)
         holder: list[TrajectoryGoal] = []
         sent_at = time.monotonic()
         future = self._action.send_goal_async(
             goal, feedback_callback=lambda msg: holder and holder[0]._feedback(msg))
         _wait(future.done, timeout, f'no answer to the goal from {self.action_name}')
+        self.goal_latencies.append(time.monotonic() - sent_at)
         handle = future.result()
         if not handle.accepted:
             raise ClientError(f'goal rejected by {self.action_name}: {self._rejection_reason(sent_at)}')
         holder.append(TrajectoryGoal(handle, feedback_callback))
+        self._goals.add(holder[0])
         return holder[0].wait() if wait else holder[0]
 
     def _rejection_reason(self, since: float) -> str:

@@ -19,7 +19,8 @@ from ur_glue_planner.report.glue_report import Executed
 #: ``on_progress(segment name, fraction of its duration done, max joint tracking error [rad])``.
 Progress = Callable[[str, float, float], None]
 
-BEAD_DELIVERY = 1.0  # [s] of wall time allowed for the bead goal to reach the controller before it starts
+BEAD_DELIVERY = 1.0  # [s] of wall time allowed at least for the bead goal to reach the controller before it starts
+DELIVERY_FACTOR = 4.0  # x the slowest goal answer seen so far: a loaded machine gets a margin in proportion
 RECORD_RATE = 50.0  # [Hz] nominal; the report uses every message received (exact stamps)
 MESSAGES = {
     0: 'bead completed',
@@ -63,6 +64,12 @@ def _print(text: str) -> None:
     print(text, flush=True)
 
 
+def bead_delivery(goal_latencies: list[float]) -> float:
+    """Wall time [s] to allow for the bead goal's delivery: BEAD_DELIVERY, or DELIVERY_FACTOR x the slowest
+    answer to an earlier goal when that is longer (several jobs sharing the cores answer slowly)."""
+    return max(BEAD_DELIVERY, DELIVERY_FACTOR * max(goal_latencies, default=0.0))
+
+
 def dispenser_events(plan: GluePlan) -> list[SwitchEvent]:
     """The plan's gun switching as events on the bead segment's trajectory clock."""
     d = plan.dispense
@@ -99,10 +106,13 @@ def execute(ur: URClient, plan: GluePlan, stop: threading.Event, log: Callable[[
     try:
         for seg in plan.segments():
             early = max(0.0, -plan.dispense.t_on) if (seg.name == 'bead' and gun is not None) else 0.0
+            # Built before the start is chosen: a long goal takes a while to build on a loaded machine.
+            goal = ur.trajectory_goal(seg.q, seg.qd, seg.qdd, seg.times, path_tolerance=path_tol,
+                                      goal_tolerance=goal_tol, goal_time_tolerance=job.tolerances.goal_time)
             if seg.name == 'bead':
                 # The bead's start is fixed in advance (the gun switches on its clock): a stamp ahead, with a
-                # margin for the goal's delivery [s of wall time] that a loaded machine also meets.
-                t0 = start = ur.start_time(lead=0.1 + early, delivery=BEAD_DELIVERY)
+                # margin for the goal's delivery [s of wall time] that grows with the answer times seen so far.
+                t0 = start = ur.start_time(lead=0.1 + early, delivery=bead_delivery(ur.goal_latencies))
             else:
                 # The moves around it start on arrival: a stamp that a slow delivery put in the past would make
                 # the controller sample the trajectory past its start, a jump that aborts the goal.
@@ -117,9 +127,7 @@ def execute(ur: URClient, plan: GluePlan, stop: threading.Event, log: Callable[[
                         f'the bead (lead {d.lead:.3f} s, lag {d.lag:.3f} s)')
             log(f'{seg.name}: {len(seg.times)} points, {seg.duration:.2f} s')
             feedback = _progress(seg.name, t0, seg.duration, log, on_progress)
-            goal = ur.follow_trajectory(seg.q, seg.qd, seg.qdd, seg.times, path_tolerance=path_tol,
-                                        goal_tolerance=goal_tol, goal_time_tolerance=job.tolerances.goal_time,
-                                        wait=False, start_time=start, feedback_callback=feedback)
+            goal = ur.send_goal(goal, start_time=start, wait=False, feedback_callback=feedback)
             while not goal.done:
                 if stop.is_set():
                     log(f'\ninterrupted: cancelling the {seg.name} goal')
