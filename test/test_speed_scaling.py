@@ -126,3 +126,21 @@ def test_trajectory_time_follows_the_slider():
     # 1 s of real time is 0.25 s of trajectory time (the slow reference needs no slowdown of the robot's own).
     assert jtc.trajectory_time - dt == pytest.approx(500 * dt * 0.25)
     assert jtc.scaling.factor == pytest.approx(0.25)
+
+
+def test_update_at_rest_equals_update_with_a_reference_at_rest():
+    rng = np.random.default_rng(7)
+    zero = np.zeros(2)
+    for _ in range(200):
+        a, b = RobotSpeedScaling(V_MAX, A_MAX, 1.0), RobotSpeedScaling(V_MAX, A_MAX, 1.0)
+        a.slider = b.slider = float(rng.uniform(0.0, 1.0))
+        # the same random history on both: moving cycles that slow the robot, ramp the input and the slider
+        for _ in range(5):
+            rate, lag, factor = rng.uniform(-6, 6, 2), rng.uniform(-0.2, 0.2, 2), float(rng.uniform(0, 1))
+            a.update(rate, lag, factor, 0.002)
+            b.update(rate, lag, factor, 0.002)
+        assert a.own < 1.0 or a.input != 1.0 or a.slider_applied != a.slider  # something for the rest to settle
+        for _ in range(30):
+            factor = float(rng.choice([0.0, 0.3, 1.0, a.input]))
+            assert a.update(zero, zero, factor, 0.002) == b.update_at_rest(factor, 0.002)
+            assert (a.input, a.slider_applied, a.own) == (b.input, b.slider_applied, b.own)

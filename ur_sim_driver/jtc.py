@@ -85,6 +85,7 @@ class TrajectoryController:
         self.stop: np.ndarray | None = np.array(hold_positions, dtype=float)
         self._first_sample = False
         self._hold = np.array(hold_positions, dtype=float)
+        self._hold_cached: TrajectorySample | None = None
         self._trajectory: Trajectory | None = None
         self._tolerances: SegmentTolerances | None = None
         self._token: Hashable | None = None
@@ -161,8 +162,8 @@ class TrajectoryController:
         traj = self._trajectory
         if traj is None:
             raw = self._hold_sample()
-            # Holding, nothing lags: the hold sample's zero velocities serve as the (zero) lag.
-            self.scaling.update(raw.velocities, raw.velocities, self.speed_scaling, period)
+            # Holding, nothing moves or lags: the scaling's update for a reference at rest.
+            self.scaling.update_at_rest(self.speed_scaling, period)
             self.stop = self._hold
             sample = raw
         else:
@@ -212,5 +213,12 @@ class TrajectoryController:
         return Outcome(token, code, f'{reason} after goal_time {tol.goal_time:.3f} s')
 
     def _hold_sample(self) -> TrajectorySample:
-        n = len(self._hold)
-        return TrajectorySample(self._hold.copy(), np.zeros(n), np.zeros(n), 0, True)
+        """The sample of the held position, built once per hold: read-only arrays, shared by every cycle."""
+        cached = self._hold_cached
+        if cached is None or cached.positions.base is not self._hold:
+            n = len(self._hold)
+            arrays = self._hold[:], np.zeros(n), np.zeros(n)  # a view: its base tells which hold it belongs to
+            for a in arrays:
+                a.flags.writeable = False
+            cached = self._hold_cached = TrajectorySample(*arrays, 0, True)
+        return cached

@@ -108,6 +108,14 @@ class RobotSpeedScaling:
         with np.errstate(divide='ignore'):
             return float(np.min(np.where(speed > 0.0, self.a_max / speed, np.inf))) * period
 
+    def update_at_rest(self, input_factor: float, period: float) -> float:
+        """`update` for a reference at rest (zero rate and lag), without its arithmetic: nothing moves, so the
+        input factor and the slider apply at once and the robot needs no slowdown of its own (target 1)."""
+        self.input = float(input_factor)
+        self.slider_applied = self.slider
+        self.own = min(max(1.0, self.own - period / FALL_TIME), self.own + period / RISE_TIME)
+        return self.factor
+
     def update(self, rate: np.ndarray, lag: np.ndarray, input_factor: float, period: float) -> float:
         """Advance one cycle and return the new factor (slider x own slowdown).
 
