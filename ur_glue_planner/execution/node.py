@@ -102,6 +102,9 @@ def run_job(params: dict, stop: threading.Event, context=None) -> int:
                 outcome, run = execute(ur, plan, stop, gun=gun, bead=bead)
             except Interrupted:
                 return 130
+            except ClientError as exc:  # the robot stopped answering (a service or a goal response timed out)
+                print(f'ur_glue_planner: execution ({method}) failed: {exc}', file=sys.stderr)
+                return 3
             sub = out_dir if i == 0 else out_dir / method
             summary = write_report(plan, run, outcome.error_code, outcome.error_string, sub,
                                    render=bool(params.get('render', True)) and i == 0)
