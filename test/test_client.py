@@ -95,12 +95,14 @@ def test_a_built_goal_is_stamped_when_sent_and_its_answer_time_kept(sim_and_clie
     q0 = ur.joint_state().q
     goal = ur.trajectory_goal(q0[None, :] + 0.05, np.zeros((1, 6)), None, [0.5])
     assert (goal.trajectory.header.stamp.sec, goal.trajectory.header.stamp.nanosec) == (0, 0)
-    answered = len(ur.goal_latencies)
+    answered = len(ur.goal_answers)
     start = ur.start_time()
     handle = ur.send_goal(goal, start_time=start, wait=False)
     stamp = goal.trajectory.header.stamp
     assert stamp.sec + stamp.nanosec * 1e-9 == pytest.approx(start, abs=1e-9)
-    assert len(ur.goal_latencies) == answered + 1 and 0.0 < ur.goal_latencies[-1] < 10.0
+    assert len(ur.goal_answers) == answered + 1
+    seconds, points = ur.goal_answers[-1]
+    assert 0.0 < seconds < 10.0 and points == 1
     assert handle.wait(timeout=30).succeeded
 
 

@@ -6,15 +6,16 @@ from ur_glue_planner.execution.run import BEAD_DELIVERY, DELIVERY_FACTOR, MESSAG
 
 
 def test_bead_delivery_is_the_floor_on_a_quick_machine():
-    assert bead_delivery([]) == BEAD_DELIVERY
-    assert bead_delivery([0.004, 0.02]) == BEAD_DELIVERY
+    assert bead_delivery([], 792) == BEAD_DELIVERY
+    assert bead_delivery([(0.004, 201), (0.02, 95)], 792) == BEAD_DELIVERY
 
 
-def test_bead_delivery_grows_with_the_slowest_answer_seen():
-    # Four jobs sharing two cores answered goals in about 0.4 s; a 1 s margin let the bead's goal arrive
-    # after its own start (the controller then samples past the start: PATH_TOLERANCE_VIOLATED).
-    assert bead_delivery([0.05, 0.6, 0.2]) == pytest.approx(DELIVERY_FACTOR * 0.6)
-    assert bead_delivery([0.6]) > BEAD_DELIVERY
+def test_bead_delivery_grows_with_the_slowest_answer_seen_scaled_to_the_beads_length():
+    # Four jobs sharing two cores answered a 201-point goal in about 0.3 s; the 792-point bead took longer to
+    # deliver than a margin of 4 x 0.3 s, arrived after its own start and aborted (PATH_TOLERANCE_VIOLATED).
+    assert bead_delivery([(0.3, 201), (0.05, 95)], 792) == pytest.approx(DELIVERY_FACTOR * 0.3 * 792 / 201)
+    assert bead_delivery([(0.6, 792)], 792) == pytest.approx(DELIVERY_FACTOR * 0.6)
+    assert bead_delivery([(0.6, 1000)], 792) == pytest.approx(DELIVERY_FACTOR * 0.6)  # never scaled down
 
 
 @pytest.mark.parametrize('code', sorted(MESSAGES))

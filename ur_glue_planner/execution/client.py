@@ -186,8 +186,8 @@ class URClient:
         self._errors: list[tuple[float, str]] = []
         self._urdf: str | None = None
         self._recorders: list[JointStateRecorder] = []
-        #: Wall time [s] from sending each goal to its acceptance or rejection, oldest first.
-        self.goal_latencies: list[float] = []
+        #: (wall time [s] from sending to the answer, number of points) of each goal sent, oldest first.
+        self.goal_answers: list[tuple[float, int]] = []
         self._history: deque[tuple[float, float]] = deque(maxlen=100)  # (wall, stamp) of recent joint states
         self.node.create_subscription(JointState, f'{prefix}/joint_states', self._on_joint_state, QoSProfile(depth=10))
         self.node.create_subscription(Log, '/rosout', self._on_log, QoSProfile(depth=50))
@@ -371,7 +371,7 @@ class URClient:
         future = self._action.send_goal_async(
             goal, feedback_callback=lambda msg: holder and holder[0]._feedback(msg))
         _wait(future.done, timeout, f'no answer to the goal from {self.action_name}')
-        self.goal_latencies.append(time.monotonic() - sent_at)
+        self.goal_answers.append((time.monotonic() - sent_at, len(goal.trajectory.points)))
         handle = future.result()
         if not handle.accepted:
             raise ClientError(f'goal rejected by {self.action_name}: {self._rejection_reason(sent_at)}')

@@ -64,10 +64,12 @@ def _print(text: str) -> None:
     print(text, flush=True)
 
 
-def bead_delivery(goal_latencies: list[float]) -> float:
-    """Wall time [s] to allow for the bead goal's delivery: BEAD_DELIVERY, or DELIVERY_FACTOR x the slowest
-    answer to an earlier goal when that is longer (several jobs sharing the cores answer slowly)."""
-    return max(BEAD_DELIVERY, DELIVERY_FACTOR * max(goal_latencies, default=0.0))
+def bead_delivery(answers: list[tuple[float, int]], points: int) -> float:
+    """Wall time [s] to allow for the delivery of a bead goal of `points` points: BEAD_DELIVERY, or
+    DELIVERY_FACTOR x the slowest answer to an earlier goal (seconds, points), scaled up to `points`, when that
+    is longer. Several jobs sharing the cores answer slowly, and a long goal takes longer to deliver and check."""
+    worst = max((seconds * max(1.0, points / max(n, 1)) for seconds, n in answers), default=0.0)
+    return max(BEAD_DELIVERY, DELIVERY_FACTOR * worst)
 
 
 def dispenser_events(plan: GluePlan) -> list[SwitchEvent]:
@@ -112,7 +114,8 @@ def execute(ur: URClient, plan: GluePlan, stop: threading.Event, log: Callable[[
             if seg.name == 'bead':
                 # The bead's start is fixed in advance (the gun switches on its clock): a stamp ahead, with a
                 # margin for the goal's delivery [s of wall time] that grows with the answer times seen so far.
-                t0 = start = ur.start_time(lead=0.1 + early, delivery=bead_delivery(ur.goal_latencies))
+                delivery = bead_delivery(ur.goal_answers, len(seg.times))
+                t0 = start = ur.start_time(lead=0.1 + early, delivery=delivery)
             else:
                 # The moves around it start on arrival: a stamp that a slow delivery put in the past would make
                 # the controller sample the trajectory past its start, a jump that aborts the goal.
@@ -128,6 +131,9 @@ def execute(ur: URClient, plan: GluePlan, stop: threading.Event, log: Callable[[
             log(f'{seg.name}: {len(seg.times)} points, {seg.duration:.2f} s')
             feedback = _progress(seg.name, t0, seg.duration, log, on_progress)
             goal = ur.send_goal(goal, start_time=start, wait=False, feedback_callback=feedback)
+            if seg.name == 'bead':
+                log(f'  accepted {1e3 * ur.goal_answers[-1][0]:.0f} ms after sending, its start stamped '
+                    f'{delivery:.1f} s of wall time ahead')
             while not goal.done:
                 if stop.is_set():
                     log(f'\ninterrupted: cancelling the {seg.name} goal')
