@@ -33,22 +33,31 @@ class _Domain:
     def __init__(self, domain: int) -> None:
         self.domain = domain
         self.env = {**os.environ, 'ROS_DOMAIN_ID': str(domain)}
+        self.log = tempfile.TemporaryFile('w+')  # what ur_sim printed, for a failure's report
         self.sim = subprocess.Popen(
             ['ur_sim', '--ros-args', '--params-file', str(CONFIG / 'ur_sim_windshield.yaml'),
              '-p', 'real_time_factor:=0.0'],
-            env=self.env, stdout=subprocess.DEVNULL, stderr=subprocess.DEVNULL, start_new_session=True)
+            env=self.env, stdout=self.log, stderr=subprocess.STDOUT, start_new_session=True)
         self.ctx = Context()
         rclpy.init(context=self.ctx, domain_id=domain)
         self.node = Node(f'bench_scale_probe_{domain}', context=self.ctx)
 
     def clock(self) -> tuple[float, float]:
-        return _clock_sample(self.node)
+        try:
+            return _clock_sample(self.node)
+        except TimeoutError as exc:
+            self.log.seek(0)
+            state = 'running' if self.sim.poll() is None else f'exited with {self.sim.returncode}'
+            raise TimeoutError(f'{exc} (domain {self.domain}, ur_sim {state}); it printed:\n'
+                               f'{self.log.read()[-3000:]}') from exc
 
     def close(self) -> None:
         self.node.destroy_node()
         rclpy.try_shutdown(context=self.ctx)
-        os.killpg(self.sim.pid, 2)
+        if self.sim.poll() is None:
+            os.killpg(self.sim.pid, 2)
         self.sim.wait(timeout=30)
+        self.log.close()
 
 
 def run_batch(n: int) -> dict:

@@ -124,13 +124,25 @@ class DispenserIO:
         self._pending = []
         return list(self.records)
 
-    def off(self, pin: int, timeout: float = 5.0) -> bool:
-        """Switch ``pin`` off now and wait for the answer (any armed events are dropped first)."""
+    def off(self, pin: int, timeout: float = 5.0, resend: float = 1.0) -> bool:
+        """Switch ``pin`` off now and wait for the answer (any armed events are dropped first).
+
+        A request not answered within ``resend`` [s] is sent again (switching off twice does no harm): an answer
+        is lost when the server sends it before DDS has matched this client's response reader, which a loaded
+        machine makes likely for the first call. Raises ClientError when nothing answers within ``timeout`` [s].
+        """
         self.disarm()
-        future = self.client.call_async(SetIO.Request(fun=SetIO.Request.FUN_SET_DIGITAL_OUT, pin=pin, state=0.0))
+        request = SetIO.Request(fun=SetIO.Request.FUN_SET_DIGITAL_OUT, pin=pin, state=0.0)
         deadline = time.monotonic() + timeout
-        while not future.done():
-            if time.monotonic() > deadline:
-                raise ClientError(f'{SET_IO}: no answer to switching pin {pin} off within {timeout:.1f} s')
-            time.sleep(0.005)
-        return bool(future.result().success)
+        futures = []
+        while True:
+            futures.append(self.client.call_async(request))
+            again = time.monotonic() + resend
+            while time.monotonic() < again:
+                answered = next((f for f in futures if f.done()), None)
+                if answered is not None:
+                    return bool(answered.result().success)
+                if time.monotonic() > deadline:
+                    raise ClientError(f'{SET_IO}: no answer to switching pin {pin} off within {timeout:.1f} s '
+                                      f'({len(futures)} requests sent)')
+                time.sleep(0.005)

@@ -104,7 +104,7 @@ def execute(ur: URClient, plan: GluePlan, stop: threading.Event, log: Callable[[
     if gun is not None:
         # the gun starts off, and the call path to set_io is exercised before it matters: a first request can
         # take far longer than the next ones (DDS matching of the response path)
-        gun.off(plan.dispense.pin)
+        gun.off(plan.dispense.pin, timeout=15.0)
     try:
         for seg in plan.segments():
             early = max(0.0, -plan.dispense.t_on) if (seg.name == 'bead' and gun is not None) else 0.0
