@@ -28,6 +28,9 @@ from rclpy.node import Node
 from ur_sim_driver import conversions as conv
 from ur_sim_driver import result_codes
 from ur_sim_driver.cdr_template import CdrTemplate
+from ur_sim_driver.controller_state import ARRAYS as STATE_ARRAYS
+from ur_sim_driver.controller_state import FIELDS as STATE_FIELDS
+from ur_sim_driver.controller_state import pack_state
 from ur_sim_driver.controllers.base import Cycle, Host
 from ur_sim_driver.controllers.joint_command import JointCommandController
 from ur_sim_driver.errors import TrajectoryError
@@ -47,8 +50,6 @@ QUERY_INACTIVE = "Can't sample trajectory. Controller is not active."
 QUERY_NO_TRAJECTORY = 'Currently there is no valid trajectory instance.'
 
 # The arrays of controller_state that update() fills, point by point, in the order it writes them.
-_STATE_FIELDS = (('reference', ('positions', 'velocities', 'accelerations')), ('feedback', ('positions', 'velocities')),
-                 ('error', ('positions', 'velocities')), ('output', ('positions', 'velocities', 'effort')))
 
 
 class JointTrajectoryControllerComponent(JointCommandController):
@@ -95,12 +96,13 @@ class JointTrajectoryControllerComponent(JointCommandController):
         # controller fills: reference (q, qd, qdd), feedback and error (q, qd), output (q, qd, effort).
         zeros = [0.0] * len(self.core.joint_names)
         state = JointTrajectoryControllerState(joint_names=list(self.core.joint_names))
-        for point, fields in _STATE_FIELDS:
+        for point, fields in STATE_FIELDS:
             for field in fields:
                 setattr(getattr(state, point), field, zeros)
         self._state_cdr = CdrTemplate(state, stamps=('header.stamp',), floats=(
-            *(f'{point}.{field}' for point, fields in _STATE_FIELDS for field in fields), 'speed_scaling_factor'),
+            *(f'{point}.{field}' for point, fields in STATE_FIELDS for field in fields), 'speed_scaling_factor'),
             publisher=self._pub_state)
+        self._state_values = np.empty(STATE_ARRAYS * len(self.core.joint_names) + 1)  # reused: publish copies it
 
     # ---- lifecycle (simulation loop, under the lock) --------------------------------------------------------------
     def on_activate(self) -> None:
@@ -145,9 +147,8 @@ class JointTrajectoryControllerComponent(JointCommandController):
         q_ref, qd_ref = sample.positions, sample.velocities
         # The controller reports the factor it advances trajectory time by; the broadcaster the robot's own.
         factor = cycle.total_factor if self.scaled else 1.0
-        self._state_cdr.publish(np.concatenate((
-            q_ref, qd_ref, sample.accelerations, state.q, state.qd, q_ref - state.q, qd_ref - state.qd,
-            q_ref, qd_ref, cycle.effort, (factor,))), cycle.stamp_parts)
+        self._state_cdr.publish(pack_state(q_ref, qd_ref, sample.accelerations, state.q, state.qd, cycle.effort,
+                                           factor, self._state_values), cycle.stamp_parts)
         token = self._token
         if token is not None and cycle.index % self._feedback_every == 0:
             self._link.send(Feedback(token, state.t, (sample.positions, sample.velocities, sample.accelerations),
