@@ -80,10 +80,12 @@ def run_batch(n: int) -> dict:
                 code = job.wait(timeout=900)
                 w1, s1 = d.clock()
                 result = {'exit_code': code, 'wall_s': w1 - w0, 'sim_s': s1 - s0, 'rtf': (s1 - s0) / (w1 - w0)}
-                if code != 0:  # what the planner printed last
+                if code != 0:  # what the planner and its simulator printed last
                     log = logs[len(results)]
                     log.seek(0)
                     result['output_tail'] = log.read()[-1500:]
+                    d.log.seek(0)
+                    result['sim_output_tail'] = d.log.read()[-3000:]
                 results.append(result)
             for log in logs:
                 log.close()
