@@ -8,7 +8,6 @@ message helper, not the simulator).
 """
 from __future__ import annotations
 
-import time
 from dataclasses import dataclass
 
 import numpy as np
@@ -18,6 +17,7 @@ from sensor_msgs.msg import PointCloud2
 from std_srvs.srv import Trigger
 
 from ur_glue_planner.errors import ClientError
+from ur_glue_planner.execution.service_call import call_idempotent
 from ur_sim_driver.bead import BASE_IN_WORLD, from_cloud
 
 BEAD_TOPIC = '/ur_sim/glue_bead'
@@ -72,15 +72,11 @@ class BeadListener:
         return self.clear_client.wait_for_service(timeout_sec=timeout)
 
     def clear(self, timeout: float = 5.0) -> None:
-        """Remove the bead laid so far (the next job starts on clean glass)."""
-        future = self.clear_client.call_async(Trigger.Request())
-        deadline = time.monotonic() + timeout
-        while not future.done():
-            if time.monotonic() > deadline:
-                raise ClientError(f'{CLEAR_SERVICE}: no answer within {timeout:.1f} s')
-            time.sleep(0.005)
-        if not future.result().success:
-            raise ClientError(f'{CLEAR_SERVICE}: {future.result().message}')
+        """Remove the bead laid so far (the next job starts on clean glass); sent again while unanswered
+        (clearing twice does no harm; see service_call.py)."""
+        answer = call_idempotent(self.clear_client, Trigger.Request(), 'clearing the bead', timeout)
+        if not answer.success:
+            raise ClientError(f'{CLEAR_SERVICE}: {answer.message}')
 
     def bead(self) -> BeadPoints | None:
         """The newest bead received, or None."""

@@ -9,7 +9,6 @@ at the end, on failure and on cancel.
 from __future__ import annotations
 
 import threading
-import time
 from dataclasses import dataclass
 
 from control_msgs.msg import JointTrajectoryControllerState
@@ -18,7 +17,7 @@ from rclpy.qos import QoSProfile
 from ur_msgs.msg import IOStates
 from ur_msgs.srv import SetIO
 
-from ur_glue_planner.errors import ClientError
+from ur_glue_planner.execution.service_call import call_idempotent
 from ur_glue_planner.execution.switch_timer import ScaledClock, SwitchEvent, SwitchSequence
 
 SET_IO = '/io_and_status_controller/set_io'
@@ -127,22 +126,9 @@ class DispenserIO:
     def off(self, pin: int, timeout: float = 5.0, resend: float = 1.0) -> bool:
         """Switch ``pin`` off now and wait for the answer (any armed events are dropped first).
 
-        A request not answered within ``resend`` [s] is sent again (switching off twice does no harm): an answer
-        is lost when the server sends it before DDS has matched this client's response reader, which a loaded
-        machine makes likely for the first call. Raises ClientError when nothing answers within ``timeout`` [s].
+        A request not answered within ``resend`` [s] is sent again (switching off twice does no harm; see
+        service_call.py). Raises ClientError when nothing answers within ``timeout`` [s].
         """
         self.disarm()
         request = SetIO.Request(fun=SetIO.Request.FUN_SET_DIGITAL_OUT, pin=pin, state=0.0)
-        deadline = time.monotonic() + timeout
-        futures = []
-        while True:
-            futures.append(self.client.call_async(request))
-            again = time.monotonic() + resend
-            while time.monotonic() < again:
-                answered = next((f for f in futures if f.done()), None)
-                if answered is not None:
-                    return bool(answered.result().success)
-                if time.monotonic() > deadline:
-                    raise ClientError(f'{SET_IO}: no answer to switching pin {pin} off within {timeout:.1f} s '
-                                      f'({len(futures)} requests sent)')
-                time.sleep(0.005)
+        return bool(call_idempotent(self.client, request, f'switching pin {pin} off', timeout, resend).success)
