@@ -49,8 +49,6 @@ DEACTIVATED = 'Current goal cancelled during deactivate transition.'  # upstream
 QUERY_INACTIVE = "Can't sample trajectory. Controller is not active."
 QUERY_NO_TRAJECTORY = 'Currently there is no valid trajectory instance.'
 
-# The arrays of controller_state that update() fills, point by point, in the order it writes them.
-
 
 class JointTrajectoryControllerComponent(JointCommandController):
     """One trajectory controller.
