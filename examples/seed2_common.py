@@ -54,9 +54,13 @@ def go_home(ur: URClient) -> None:
     ur.sleep(T_HOME + T_OFFSET)
 
 
+DELIVERY = 1.0  # [s] of wall time for a trajectory to reach the controller: one that arrives after its start is
+# sampled past it (a jump), and a loaded machine has delayed a topic message by more than 0.3 s
+
+
 def start_time(ur: URClient) -> float:
-    """A trajectory start stamp slightly in the future, in robot time [s], so a recording can be anchored to it."""
-    return ur.start_time()
+    """A trajectory start stamp in the future, in robot time [s], so a recording can be anchored to it."""
+    return ur.start_time(delivery=DELIVERY)
 
 
 def parse_args(description: str) -> argparse.Namespace:
