@@ -109,8 +109,8 @@ def execute(ur: URClient, plan: GluePlan, stop: threading.Event, log: Callable[[
         for seg in plan.segments():
             early = max(0.0, -plan.dispense.t_on) if (seg.name == 'bead' and gun is not None) else 0.0
             # Built before the start is chosen: a long goal takes a while to build on a loaded machine.
-            goal = ur.trajectory_goal(seg.q, seg.qd, seg.qdd, seg.times, path_tolerance=path_tol,
-                                      goal_tolerance=goal_tol, goal_time_tolerance=job.tolerances.goal_time)
+            request = ur.trajectory_goal(seg.q, seg.qd, seg.qdd, seg.times, path_tolerance=path_tol,
+                                         goal_tolerance=goal_tol, goal_time_tolerance=job.tolerances.goal_time)
             if seg.name == 'bead':
                 # The bead's start is fixed in advance (the gun switches on its clock): a stamp ahead, with a
                 # margin for the goal's delivery [s of wall time] that grows with the answer times seen so far.
@@ -130,7 +130,7 @@ def execute(ur: URClient, plan: GluePlan, stop: threading.Event, log: Callable[[
                         f'the bead (lead {d.lead:.3f} s, lag {d.lag:.3f} s)')
             log(f'{seg.name}: {len(seg.times)} points, {seg.duration:.2f} s')
             feedback = _progress(seg.name, t0, seg.duration, log, on_progress)
-            goal = ur.send_goal(goal, start_time=start, wait=False, feedback_callback=feedback)
+            goal = ur.send_goal(request, start_time=start, wait=False, feedback_callback=feedback)
             if seg.name == 'bead':
                 log(f'  accepted {1e3 * ur.goal_answers[-1][0]:.0f} ms after sending, its start stamped '
                     f'{delivery:.1f} s of wall time ahead')
