@@ -4,7 +4,7 @@ from __future__ import annotations
 from builtin_interfaces.msg import Duration
 from controller_manager_msgs.srv import ListControllers, ListControllerTypes, ListHardwareInterfaces, SwitchController
 from rclpy.callback_groups import ReentrantCallbackGroup
-from sim_harness import SimHarness, wait_for
+from sim_harness import SimHarness, wait_for, wait_still
 
 STRICT = SwitchController.Request.STRICT
 BEST_EFFORT = SwitchController.Request.BEST_EFFORT
@@ -26,7 +26,7 @@ class ControllerManagerClient:
         self._hardware = node.create_client(ListHardwareInterfaces, p('controller_manager/list_hardware_interfaces'),
                                             callback_group=group)
         for client in (self._list, self._switch, self._types, self._hardware):
-            wait_for(client.service_is_ready, what=f'the service {client.srv_name}')
+            wait_still(client.service_is_ready, what=f'the service {client.srv_name}')
 
     @staticmethod
     def _call(client, request):

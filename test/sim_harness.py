@@ -1,6 +1,7 @@
 """An in-process ur_sim node plus a client node on a private context, spun by a background executor."""
 from __future__ import annotations
 
+import threading
 import time
 from collections.abc import Iterator
 from contextlib import contextmanager
@@ -26,11 +27,49 @@ from ur_glue_planner.execution.action_client import ActionClient
 from ur_sim_driver.node import UrSimNode
 from ur_sim_driver.spin_thread import SpinThread
 
-TIMEOUT = 30.0  # [s] wall-clock deadline of any single wait
+TIMEOUT = 30.0  # [s] deadline of a wait: simulated time where the simulation steps, else wall time (a hang guard)
+
+
+class Lockstep:
+    """The simulation advances only inside the harness's waits, in the waiting thread, one control cycle at a time.
+
+    The test decides when simulated time passes: a message handed to ur_sim while the test holds still arrives at
+    the same simulated time however loaded the machine is, and every deadline is stated in simulated time. Waits
+    for delivery alone (discovery, a goal's answer, a trajectory reaching its controller) hold the simulation
+    still; waits for something the robot does step it and check the condition after every cycle.
+    """
+
+    def __init__(self, node: UrSimNode) -> None:
+        self.node = node
+        self._lock = threading.Lock()  # one thread steps at a time
+
+    def step(self, cycles: int = 1) -> None:
+        with self._lock:
+            for _ in range(cycles):
+                self.node.step_once()
+
+
+_lockstep: list[Lockstep] = []  # the running lockstep simulations, innermost last
 
 
 def wait_for(condition, timeout: float = TIMEOUT, what: str = 'condition') -> None:
-    """Poll `condition()` (the executor spins in its own thread) until true or the deadline passes."""
+    """Wait until `condition()` is true: stepping a lockstep simulation cycle by cycle (deadline `timeout` [s] of
+    simulated time), or polling while a free-running one runs (deadline in wall time)."""
+    if _lockstep:
+        lockstep = _lockstep[-1]
+        sim = lockstep.node.sim
+        deadline = sim.time + timeout
+        while not condition():
+            if sim.time > deadline:
+                raise TimeoutError(f'timed out after {timeout:.0f} s of simulated time waiting for {what}')
+            lockstep.step()
+        return
+    wait_still(condition, timeout, what)
+
+
+def wait_still(condition, timeout: float = TIMEOUT, what: str = 'condition') -> None:
+    """Wait until `condition()` is true without stepping a lockstep simulation: for delivery (discovery, a goal's
+    answer, a message reaching ur_sim). The deadline is wall time, a guard against a hang."""
     deadline = time.monotonic() + timeout
     while not condition():
         if time.monotonic() > deadline:
@@ -82,16 +121,16 @@ class SimHarness:
         # Its own group: a busy subscription of the client node must never hold up goal responses.
         self.action = ActionClient(client, FollowJointTrajectory, p(f'{ctrl}/follow_joint_trajectory'),
                                    callback_group=ReentrantCallbackGroup())
-        self.topic = client.create_publisher(JointTrajectory, p(f'{ctrl}/joint_trajectory'), 10)
+        self.topic = _HandedOver(client.create_publisher(JointTrajectory, p(f'{ctrl}/joint_trajectory'), 10), sim)
         self.scaling = client.create_publisher(SpeedScalingFactor, p(f'{ctrl}/speed_scaling_input'), 10)
         self.recording: Recording | None = None
         self._js_topic = p('joint_states')
         self._scaling_topic = p('speed_scaling_state_broadcaster/speed_scaling')
         self._recorder: Node | None = None
         self._listeners: list = []
-        wait_for(lambda: self.action.server_is_ready(), what='the FollowJointTrajectory server')
+        wait_still(lambda: self.action.server_is_ready(), what='the FollowJointTrajectory server')
         self._warm_up_action()
-        wait_for(lambda: self.topic.get_subscription_count() > 0, what='the joint_trajectory subscriber')
+        wait_still(lambda: self.topic.get_subscription_count() > 0, what='the joint_trajectory subscriber')
 
     def _warm_up_action(self) -> None:
         """Send goals without points (rejected, no side effect) until one is answered.
@@ -169,8 +208,8 @@ class SimHarness:
         rec = self.recording
         if catch_up and rec is not None and self._recorder is not None:
             last_cycle = self.sim.sim.time - self.sim.sim.control_dt  # [s] stamp of the last finished cycle
-            wait_for(lambda: bool(rec.t) and rec.t[-1] >= last_cycle - 1e-9,
-                     what=f'the joint state stamped {last_cycle:.3f} s in the recording')
+            wait_still(lambda: bool(rec.t) and rec.t[-1] >= last_cycle - 1e-9,
+                       what=f'the joint state stamped {last_cycle:.3f} s in the recording')
         rec, self.recording = self.recording, None  # the callback stops appending at once
         if self._recorder is not None:
             node, spinner = self._recorder
@@ -192,10 +231,15 @@ class SimHarness:
         return g
 
     def send(self, goal, feedback=None):
-        """Send a goal and wait for the server's answer; returns the goal handle (check .accepted)."""
+        """Send a goal and wait for the server's answer, and for an accepted goal's arrival at its controller, with
+        a lockstep simulation held still; returns the goal handle (check .accepted)."""
+        before = self.sim.commands_received
         future = self.action.send_goal_async(goal, feedback_callback=feedback)
-        wait_for(future.done, what='the goal response')
-        return future.result()
+        wait_still(future.done, what='the goal response')
+        handle = future.result()
+        if handle.accepted:
+            wait_still(lambda: self.sim.commands_received > before, what='the goal at its controller')
+        return handle
 
     def result(self, handle, timeout: float = TIMEOUT):
         """Wait for the result of an accepted goal: (status, error_code, error_string)."""
@@ -208,6 +252,74 @@ class SimHarness:
         """Wait until `dt` [s] of simulated time has passed."""
         t_end = self.sim.sim.time + dt
         wait_for(lambda: self.sim.sim.time >= t_end, what=f'{dt} s of simulated time')
+
+
+class RobotKeeper:
+    """Brings the robot back as a user would, over the driver's services: a protective stop unlocked through the
+    dashboard once the robot allows it (5 s after the stop), power and brakes through the dashboard, the External
+    Control program through resend_robot_program, and the controllers that were active when this keeper was made.
+    For fixtures: call :meth:`recover` in their teardown (or between the tests they serve)."""
+
+    def __init__(self, h: SimHarness) -> None:
+        from cm_helpers import ControllerManagerClient
+        from std_srvs.srv import Trigger
+
+        self.h = h
+        p = h.sim.cfg.prefixed
+        group = ReentrantCallbackGroup()
+        names = ('dashboard_client/unlock_protective_stop', 'dashboard_client/power_on',
+                 'dashboard_client/brake_release', 'io_and_status_controller/resend_robot_program')
+        self._trigger = {n.split('/')[-1]: h.client.create_client(Trigger, p(n), callback_group=group) for n in names}
+        for client in self._trigger.values():
+            wait_still(client.service_is_ready, what=f'the service {client.srv_name}')
+        self.cm = ControllerManagerClient(h)
+        self.active = {name for name, state in self.cm.states().items() if state == 'active'}
+
+    def _call(self, name: str) -> str:
+        from std_srvs.srv import Trigger
+
+        future = self._trigger[name].call_async(Trigger.Request())
+        wait_for(future.done, what=f'the answer of {name}')
+        answer = future.result()
+        assert answer.success, f'{name}: {answer.message}'
+        return answer.message
+
+    def recover(self) -> None:
+        from ur_sim_driver.robot_state import PROTECTIVE_STOP, RUNNING
+
+        robot = self.h.sim.robot
+        if robot.safety_mode == PROTECTIVE_STOP:
+            wait_for(lambda: robot.unlock_wait() == 0.0, what='the 5 s before a protective stop may be unlocked')
+            self._call('unlock_protective_stop')
+        if robot.robot_mode != RUNNING:
+            self._call('power_on')
+            self._call('brake_release')
+            wait_for(lambda: robot.robot_mode == RUNNING, what='the robot mode RUNNING')
+        if not robot.program_running:
+            self._call('resend_robot_program')
+        wait_for(lambda: self.h.sim.robot.motion_refusal() is None, what='the robot ready to move')
+        states = self.cm.states()
+        now = {name for name, state in states.items() if state == 'active'}
+        if now != self.active:
+            answer = self.cm.switch(activate=sorted(self.active - now), deactivate=sorted(now - self.active))
+            assert answer.ok, answer
+
+
+class _HandedOver:
+    """A joint_trajectory publisher whose publish() returns once ur_sim has the message (started or dropped),
+    holding a lockstep simulation still meanwhile; anything else is the publisher's."""
+
+    def __init__(self, publisher, sim: UrSimNode) -> None:
+        self._publisher = publisher
+        self._sim = sim
+
+    def publish(self, msg) -> None:
+        before = self._sim.commands_received
+        self._publisher.publish(msg)
+        wait_still(lambda: self._sim.commands_received > before, what='the joint_trajectory message at ur_sim')
+
+    def __getattr__(self, name):
+        return getattr(self._publisher, name)
 
 
 def _flatten(params: dict, prefix: str = '') -> dict:
@@ -234,11 +346,19 @@ def yaml_params(path) -> dict:
 
 
 @contextmanager
-def running_sim(**params) -> Iterator[SimHarness]:
-    """ur_sim (as fast as possible unless `real_time_factor` is given) with a client, on a private context."""
+def running_sim(lockstep: bool | None = None, **params) -> Iterator[SimHarness]:
+    """ur_sim with a client, on a private context.
+
+    By default in lockstep (:class:`Lockstep`): the simulation advances only while the test waits for something
+    the robot does. With `real_time_factor` given (the wall clock is the subject) it runs free, paced to the wall
+    clock; `lockstep=False` runs it free and as fast as possible.
+    """
+    if lockstep is None:
+        lockstep = 'real_time_factor' not in params
     params.setdefault('real_time_factor', 0.0)
     with ros_context() as ctx:
-        sim = UrSimNode(context=ctx, parameter_overrides=[_param(k, v) for k, v in _flatten(params).items()])
+        sim = UrSimNode(context=ctx, parameter_overrides=[_param(k, v) for k, v in _flatten(params).items()],
+                        start=not lockstep)
         client = Node('test_client', context=ctx)
         executor = MultiThreadedExecutor(num_threads=4, context=ctx)
         for node in sim.nodes():
@@ -246,10 +366,14 @@ def running_sim(**params) -> Iterator[SimHarness]:
         executor.add_node(client)
         spinner = SpinThread(executor, 'test_executor').start()
         harness = None
+        if lockstep:
+            _lockstep.append(Lockstep(sim))
         try:
             harness = SimHarness(sim, client)
             yield harness
         finally:
+            if lockstep:
+                _lockstep.pop()
             if harness is not None:
                 harness.close()
             sim.shutdown()

@@ -8,7 +8,7 @@ import time
 import numpy as np
 import pytest
 from action_msgs.msg import GoalStatus
-from sim_harness import TIMEOUT, point, running_sim, trajectory, wait_for
+from sim_harness import TIMEOUT, point, running_sim, trajectory, wait_for, wait_still
 from std_srvs.srv import Trigger
 from ur_dashboard_msgs.msg import RobotMode, SafetyMode
 from ur_dashboard_msgs.srv import (
@@ -47,7 +47,7 @@ class Dashboard:
         self.clients = {name: h.client.create_client(Trigger, f'/dashboard_client/{name}') for name in TRIGGERS}
         self.clients.update({name: h.client.create_client(t, f'/dashboard_client/{name}') for name, t in TYPED.items()})
         for name, client in self.clients.items():
-            wait_for(client.service_is_ready, what=f'/dashboard_client/{name}')
+            wait_still(client.service_is_ready, what=f'/dashboard_client/{name}')
 
     def call(self, name: str, **fields):
         client = self.clients[name]

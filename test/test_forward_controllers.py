@@ -5,7 +5,7 @@ from __future__ import annotations
 import numpy as np
 import pytest
 from cm_helpers import BEST_EFFORT, ControllerManagerClient
-from sim_harness import running_sim, wait_for
+from sim_harness import running_sim, wait_for, wait_still
 from std_msgs.msg import Float64MultiArray
 
 from ur_sim_driver.controllers.forward_command import check_command
@@ -20,7 +20,7 @@ def robot():
         h.cm = ControllerManagerClient(h)
         h.pub = {name: h.client.create_publisher(Float64MultiArray, f'/{name}/commands', 10) for name in (FPC, FVC)}
         for pub in h.pub.values():
-            wait_for(lambda pub=pub: pub.get_subscription_count() > 0, what='the commands subscriber')
+            wait_still(lambda pub=pub: pub.get_subscription_count() > 0, what='the commands subscriber')
         yield h
 
 

@@ -11,7 +11,7 @@ import threading
 import numpy as np
 import pytest
 from geometry_msgs.msg import Vector3
-from sim_harness import point, running_sim, wait_for
+from sim_harness import point, running_sim, wait_for, wait_still
 from std_msgs.msg import Bool, Float64
 from std_srvs.srv import Trigger
 from test_payload import pinocchio_gravity
@@ -54,7 +54,7 @@ def client_for(h, srv_type, name: str):
     clients = h.__dict__.setdefault('_test_clients', {})
     if name not in clients:
         clients[name] = h.client.create_client(srv_type, name)
-        wait_for(clients[name].service_is_ready, what=f'the service {name}')
+        wait_still(clients[name].service_is_ready, what=f'the service {name}')
     return clients[name]
 
 

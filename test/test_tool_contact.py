@@ -11,7 +11,7 @@ from cm_helpers import BEST_EFFORT, ControllerManagerClient
 from control_msgs.action import FollowJointTrajectory
 from rclpy.action import ActionClient
 from rclpy.callback_groups import ReentrantCallbackGroup
-from sim_harness import running_sim, wait_for
+from sim_harness import RobotKeeper, running_sim, wait_for, wait_still
 from ur_msgs.action import ToolContact
 
 from ur_glue_planner.execution.ros_conversions import joint_trajectory
@@ -40,11 +40,11 @@ class ToolContactClient:
     def __init__(self, h) -> None:
         self.client = ActionClient(h.client, ToolContact, f'/{NAME}/detect_tool_contact',
                                    callback_group=ReentrantCallbackGroup())
-        wait_for(self.client.server_is_ready, what='the ToolContact server')
+        wait_still(self.client.server_is_ready, what='the ToolContact server')
 
     def send(self):
         future = self.client.send_goal_async(ToolContact.Goal())
-        wait_for(future.done, what='the ToolContact goal response')
+        wait_still(future.done, what='the ToolContact goal response')
         return future.result()
 
     @staticmethod
@@ -73,7 +73,15 @@ def scene():
         kin = ur_kinematics(job.ur_type, job.tool)
         seg = touch_move(kin, plan.bead.q[0], tool_axis(job.tool), height=0.01, depth=0.01, speed=TOUCH_SPEED,
                          dt=job.sample_time)
-        yield h, seg, ControllerManagerClient(h), ToolContactClient(h)
+        yield h, seg, ControllerManagerClient(h), ToolContactClient(h), RobotKeeper(h)
+
+
+@pytest.fixture(autouse=True)
+def recovered(request):
+    """After each test that used the scene: the robot able to move again, the controllers as at the start."""
+    yield
+    if 'scene' in request.fixturenames:
+        request.getfixturevalue('scene')[-1].recover()
 
 
 def move_to_start(h, seg) -> None:
@@ -85,7 +93,7 @@ def move_to_start(h, seg) -> None:
 
 
 def test_goal_rules(scene):
-    h, seg, cm, tc = scene
+    h, seg, cm, tc, _ = scene
     assert cm.controllers()[NAME].claimed_interfaces == []
     assert not tc.send().accepted  # inactive
     assert cm.switch(activate=[NAME], strictness=BEST_EFFORT).ok
@@ -107,7 +115,7 @@ def test_goal_rules(scene):
 
 
 def test_touching_the_glass_with_a_goal_stops_within_one_period_without_protective_stop(scene):
-    h, seg, cm, tc = scene
+    h, seg, cm, tc, _ = scene
     move_to_start(h, seg)
     assert cm.switch(activate=[NAME]).ok
     contact_goal = tc.send()
@@ -155,13 +163,13 @@ def test_touching_the_glass_with_a_goal_stops_within_one_period_without_protecti
 
 
 def test_a_passthrough_trajectory_is_aborted_by_the_robot(scene):
-    h, seg, cm, tc = scene
+    h, seg, cm, tc, _ = scene
     move_to_start(h, seg)
     passthrough = 'passthrough_trajectory_controller'
-    assert cm.switch(activate=[passthrough], deactivate=['scaled_joint_trajectory_controller']).ok
+    assert cm.switch(activate=[passthrough, NAME], deactivate=['scaled_joint_trajectory_controller']).ok
     client = ActionClient(h.client, FollowJointTrajectory, f'/{passthrough}/follow_joint_trajectory',
                           callback_group=ReentrantCallbackGroup())
-    wait_for(client.server_is_ready, what='the passthrough server')
+    wait_still(client.server_is_ready, what='the passthrough server')
     contact_goal = tc.send()
     assert contact_goal.accepted
     future = client.send_goal_async(goal_of(h, seg))
@@ -178,12 +186,42 @@ def test_a_passthrough_trajectory_is_aborted_by_the_robot(scene):
 
 
 def test_without_a_goal_the_same_move_ends_in_a_protective_stop(scene):
-    h, seg, cm, tc = scene
+    h, seg, cm, tc, _ = scene
     move_to_start(h, seg)
-    assert cm.states()[NAME] == 'active'  # active, but no goal: nothing watches the tool
+    assert cm.switch(activate=[NAME]).ok  # active, but no goal: nothing watches the tool
     handle = h.send(goal_of(h, seg))
     assert handle.accepted
     status, code, text = h.result(handle)
     assert (status, code) == (GoalStatus.STATUS_ABORTED, rc.INVALID_GOAL)
     assert 'safety mode is PROTECTIVE_STOP' in text
     assert h.sim.robot.safety_mode == PROTECTIVE_STOP
+
+
+@pytest.mark.parametrize('run', range(20))
+def test_a_slow_approach_ends_in_tool_contact_never_in_a_protective_stop(scene, run):
+    """Approaches at 5 to 50 mm/s from 3 to 12 mm above the glass, each started at another phase of the physics
+    steps: the tool contact stops the arm every time, the safety system never does."""
+    h, _, cm, tc, _ = scene
+    job = dataclasses.replace(load_job(default_job_path()), ur_type='ur5e')
+    kin = ur_kinematics(job.ur_type, job.tool)
+    speed = 0.005 + 0.045 * run / 19  # [m/s]
+    height = 0.003 + 0.009 * ((run * 7) % 20) / 19  # [m] above the surface at the start
+    seg = touch_move(kin, plan_job(job, h.q).bead.q[0], tool_axis(job.tool), height=height, depth=0.01,
+                     speed=speed, dt=job.sample_time)
+    move_to_start(h, seg)
+    if cm.states()[NAME] != 'active':
+        assert cm.switch(activate=[NAME], strictness=BEST_EFFORT).ok
+    contact_goal = tc.send()
+    assert contact_goal.accepted
+    handle = h.send(goal_of(h, seg))
+    assert handle.accepted
+    status, code, text = h.result(handle)
+    assert tc.status(contact_goal) == GoalStatus.STATUS_SUCCEEDED, text
+    assert (status, code) == (GoalStatus.STATUS_ABORTED, rc.PATH_TOLERANCE_VIOLATED), text
+    assert 'tool contact: dispenser touched windshield_piece_' in text, text
+    assert h.sim.robot.safety_mode == NORMAL, h.sim.robot.stop_cause
+    h.wait_sim_time(0.3)
+    q = h.q
+    h.wait_sim_time(0.5)
+    assert np.abs(h.q - q).max() < 1e-4
+    assert h.sim.robot.safety_mode == NORMAL, h.sim.robot.stop_cause

@@ -7,7 +7,7 @@ never stops the simulation loop, which must publish every 2 ms. The two processe
 below over a pipe, in order:
 
 * gateway -> simulation: :class:`Start` (a validated trajectory, in the sender's joint order), :class:`Cancel`,
-  :class:`Ack` (an :class:`Activation` has been applied);
+  :class:`Dropped` (a joint_trajectory message refused), :class:`Ack` (an :class:`Activation` has been applied);
 * simulation -> gateway: :class:`Ended` (a goal's outcome), :class:`Canceled` (the answer to a Cancel),
   :class:`Feedback`, :class:`Gate` (whether the robot may take commands now), :class:`Activation` (a controller
   was switched by the controller manager).
@@ -92,6 +92,14 @@ class Cancel:
     """The client asked `controller` to cancel goal `token`."""
 
     token: bytes
+    controller: str = ''
+
+
+@dataclass(frozen=True)
+class Dropped:
+    """`controller`'s joint_trajectory message was refused (logged by the gateway with its reason): the simulation
+    counts it with the messages it received, so that each message has one known end."""
+
     controller: str = ''
 
 

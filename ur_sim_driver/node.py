@@ -44,7 +44,7 @@ from ur_sim_driver.controllers.tool_contact import ToolContactController
 from ur_sim_driver.controllers.ur_configuration import UrConfigurationController
 from ur_sim_driver.dashboard import DashboardClient
 from ur_sim_driver.errors import UrSimError
-from ur_sim_driver.gateway_link import Gate, GatewayConfig, GatewayLink
+from ur_sim_driver.gateway_link import Dropped, Gate, GatewayConfig, GatewayLink
 from ur_sim_driver.jtc import TrajectoryController
 from ur_sim_driver.memory import use_mmap_for_large_blocks
 from ur_sim_driver.robot_state import PROTECTIVE_STOP, RobotState
@@ -93,6 +93,9 @@ class UrSimNode(Node):
         self._lock = threading.Lock()
         self._stop = threading.Event()
         self._cycle = 0
+        # Trajectories, cancels and dropped topic messages handled from the gateway, in order (read by tests and
+        # scripts that step the simulation themselves: a command has reached its controller when this counts it).
+        self.commands_received = 0
         self.robot = RobotState(powered_off=self.cfg.start_powered_off, programs=self.cfg.programs)
         self._refusal = self.robot.motion_refusal()
 
@@ -177,7 +180,10 @@ class UrSimNode(Node):
 
     # ---- from the gateway process (its receiving thread) -------------------------------------------------------
     def _on_gateway(self, message: object) -> None:
-        """A trajectory or cancel for one of the trajectory controllers."""
+        """A trajectory, cancel or dropped topic message for one of the trajectory controllers."""
+        if isinstance(message, Dropped):
+            self.commands_received += 1
+            return
         controller = self._gateway_controllers.get(message.controller)
         if controller is None:  # only a bug gets here: the gateway serves exactly these controllers
             self.get_logger().error(f'gateway message for unknown controller {message.controller!r}')
@@ -188,6 +194,7 @@ class UrSimNode(Node):
             self.robot.update(self.sim.time)
             self._controller_stopper()
         controller.on_gateway(message)
+        self.commands_received += 1
 
     # ---- simulation loop (own thread) ------------------------------------------------------------
     def _open_viewer(self):

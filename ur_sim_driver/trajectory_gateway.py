@@ -42,6 +42,7 @@ from ur_sim_driver.gateway_link import (
     Activation,
     Cancel,
     Canceled,
+    Dropped,
     Ended,
     Feedback,
     Gate,
@@ -209,10 +210,12 @@ class TrajectoryGateway:
             cmd = read_joint_trajectory(data)
         except TrajectoryError as exc:
             self.node.get_logger().error(f'Dropped JointTrajectory message: {exc}')
+            self._send(Dropped(self.name))
             return
         reason = self._validate(cmd, 'JointTrajectory message')
         if reason is not None:
             self.node.get_logger().error(f'Dropped JointTrajectory message: {reason}')
+            self._send(Dropped(self.name))
             return
         self._send(Start(None, cmd, None, self.name))
         if cmd.count >= LARGE_TRAJECTORY:
