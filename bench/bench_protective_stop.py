@@ -2,11 +2,13 @@
 
 ur_sim runs in this process without its loop thread: the benchmark steps it cycle by cycle (as the loop does)
 and reads, after every cycle, the tip's position along the tool axis and the contacts. Reported: the control
-cycle the stop came in after the first contact, the tip's travel from the first contact and from the stop to
+cycle the stop came in after the first contact (the safety system acts on a mean of the contact force,
+``safety.py``), the tip's travel from the first contact and from the stop to
 standstill, and the deepest penetration of any contact.
 """
 from __future__ import annotations
 
+import dataclasses
 import platform
 
 import numpy as np
@@ -40,8 +42,11 @@ def _run(node: UrSimNode, seg: JointSegment, seconds: float, each=None) -> None:
             each()
 
 
-def measure(ctx) -> dict:
+def measure(ctx, ur_type: str | None = None) -> dict:
+    """The stop of the job's robot (`ur_type` None: the job's UR5 at 125 Hz), or of another type."""
     job = load_job(default_job_path())
+    if ur_type is not None:
+        job = dataclasses.replace(job, ur_type=ur_type)
     node = UrSimNode(context=ctx, start=False, parameter_overrides=[
         Parameter('ur_type', value=job.ur_type), Parameter('tool', value='dispenser'),
         Parameter('scene', value='windshield'), Parameter('real_time_factor', value=0.0)])
@@ -71,7 +76,7 @@ def measure(ctx) -> dict:
         dt = node.sim.control_dt
         return {
             'ur_type': job.ur_type, 'control_rate_hz': node.sim.control_rate, 'tip_speed_m_s': SPEED,
-            'threshold_n': node.cfg.protective_stop_force,
+            'threshold_n': node.cfg.protective_stop_force, 'window_s': node.cfg.protective_stop_window,
             'stopped': stop is not None,
             'cycles_from_first_contact_to_stop': None if first is None or stop is None else stop - first,
             'force_at_stop_n': None if stop is None else float(force[stop]),
@@ -94,6 +99,7 @@ def run() -> dict:
     rclpy.init(context=ctx)
     try:
         result = measure(ctx)
+        result['ur5e'] = measure(ctx, 'ur5e')  # 500 Hz: the force mean spans 5 cycles
     finally:
         rclpy.try_shutdown(context=ctx)
     result['machine'] = {'cpus': __import__('os').cpu_count(), 'python': platform.python_version(),

@@ -21,6 +21,12 @@ from ur_glue_planner.scene.waypoints import tool_axis
 from ur_sim_driver.sim_config import SimConfig
 from ur_sim_driver.simulator import Simulator
 
+# [N m] on top of gravity compensation: shoulder and elbow press the nozzle on into the glass
+PUSH = np.array([0.0, -2.0, -2.0, 0.0, 0.0, 0.0])
+
+
+
+
 
 def _label(m: mujoco.MjModel, geom: int) -> str:
     body = int(m.geom_bodyid[geom])
@@ -76,9 +82,8 @@ def test_contacts_and_wrench_are_those_of_the_completed_physics_steps(pressed, s
     reference = mujoco.MjData(m)
     seen = 0
     for _ in range(20):
-        # Gravity and Coriolis compensated, 2 N m more on the shoulder and elbow: the nozzle pushes on.
         _, bias = sim.physics.dynamics()
-        tau = bias + np.array([0.0, 2.0, 2.0, 0.0, 0.0, 0.0])
+        tau = bias + PUSH
         mujoco.mj_copyData(reference, m, d)
         reference.ctrl[:6] = tau
         expected, sensors = _reference_step(m, reference, robot_root, substeps)

@@ -2,7 +2,7 @@
 import numpy as np
 import pytest
 
-from ur_sim_driver.safety import LIMIT_MARGIN, Contact, any_outside, contact_cause, limit_cause
+from ur_sim_driver.safety import LIMIT_MARGIN, Contact, ContactSafety, any_outside, limit_cause
 from ur_sim_driver.sim_config import sim_config_from_params
 from ur_sim_driver.simulator import Simulator
 
@@ -13,11 +13,46 @@ Q_MIN, Q_MAX = np.full(6, -1.0), np.full(6, 1.0)
 def test_the_strongest_contact_above_the_limit_is_named():
     contacts = (Contact('wrist_3_link', 'floor', 20.0, 1e-4), Contact('dispenser', 'windshield_piece_03', 80.0, 6e-4),
                 Contact('forearm_link', 'floor', 60.0, 1e-4))
-    cause = contact_cause(contacts, 50.0)
+    cause = ContactSafety(50.0, window=1).update(contacts, armed=True)
     assert cause.startswith('contact between dispenser and windshield_piece_03: force 80.0 N > 50.0 N')
     assert '0.60 mm' in cause
-    assert contact_cause(contacts, 80.0) is None  # above, not at, the limit
-    assert contact_cause((), 50.0) is None
+    assert ContactSafety(80.0, window=1).update(contacts, armed=True) is None  # above, not at, the limit
+    assert ContactSafety(50.0, window=1).update((), armed=True) is None
+
+
+def test_the_force_is_a_mean_over_the_window():
+    safety = ContactSafety(50.0, window=5)
+    spike = (Contact('dispenser', 'glass', 240.0, 1e-5),)
+    assert safety.update(spike, armed=True) is None  # 48 N over 5 cycles: one sample of a rigid contact
+    assert safety.update((), armed=True) is None
+    cause = safety.update((Contact('dispenser', 'glass', 20.0, 1e-5),), armed=True)
+    assert cause is not None and 'force 52.0 N > 50.0 N (mean over 5 cycles' in cause
+    # Forces of the same pair add up in the mean; other pairs are apart.
+    safety = ContactSafety(50.0, window=2)
+    assert safety.update((Contact('dispenser', 'glass', 60.0, 0.0), Contact('forearm_link', 'floor', 60.0, 0.0)),
+                         armed=True) is None
+    assert 'dispenser and glass: force 55.0 N' in safety.update((Contact('dispenser', 'glass', 50.0, 0.0),),
+                                                                armed=True)
+
+
+def test_a_contact_present_when_armed_stops_only_when_it_pushes_harder():
+    safety = ContactSafety(50.0, window=1, tolerance=25.0)
+    elbow = ('upper_arm_link', 'wrist_3_link')
+    assert safety.update((Contact(*elbow, 160.0, 1e-3),), armed=True) is not None  # the collision stops it
+    # Stopped (not armed): the contact as it is now becomes the tolerated one.
+    assert safety.update((Contact(*elbow, 62.0, 6e-4),), armed=False) is None
+    assert safety.limit_for(elbow) == 87.0
+    assert safety.update((Contact(*elbow, 80.0, 6e-4),), armed=True) is None  # unlocked: resting against it
+    assert safety.update((Contact(*elbow, 40.0, 3e-4),), armed=True) is None  # moving away lowers the bar
+    assert safety.limit_for(elbow) == 65.0
+    assert 'force 70.0 N > 65.0 N' in safety.update((Contact(*elbow, 70.0, 4e-4),), armed=True)  # pushed back in
+    # Once the bodies part, the next touch is a new contact with the plain limit.
+    safety = ContactSafety(50.0, window=1, tolerance=25.0)
+    safety.update((Contact(*elbow, 62.0, 6e-4),), armed=False)
+    assert safety.update((), armed=True) is None
+    assert safety.limit_for(elbow) == 50.0
+    # Not armed, nothing stops the robot, whatever the force (powered off, brakes engaged, already stopped).
+    assert safety.update((Contact(*elbow, 500.0, 1e-3),), armed=False) is None
 
 
 def test_a_joint_driven_into_its_limit_stops_but_one_ending_at_it_does_not():

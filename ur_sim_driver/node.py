@@ -47,9 +47,9 @@ from ur_sim_driver.errors import UrSimError
 from ur_sim_driver.gateway_link import Dropped, Gate, GatewayConfig, GatewayLink
 from ur_sim_driver.jtc import TrajectoryController
 from ur_sim_driver.memory import use_mmap_for_large_blocks
-from ur_sim_driver.robot_state import PROTECTIVE_STOP, RobotState
+from ur_sim_driver.robot_state import NORMAL, RUNNING, RobotState
 from ur_sim_driver.robot_state_publisher import RobotStatePublisher
-from ur_sim_driver.safety import contact_cause, limit_cause
+from ur_sim_driver.safety import ContactSafety, limit_cause
 from ur_sim_driver.sim_config import SimConfig, sim_config_from_params
 from ur_sim_driver.sim_io import SimulatedInputs
 from ur_sim_driver.sim_wrench import AppliedWrenches
@@ -97,6 +97,8 @@ class UrSimNode(Node):
         # scripts that step the simulation themselves: a command has reached its controller when this counts it).
         self.commands_received = 0
         self.robot = RobotState(powered_off=self.cfg.start_powered_off, programs=self.cfg.programs)
+        self.contact_safety = ContactSafety(self.cfg.protective_stop_force,
+                                            max(1, round(self.cfg.protective_stop_window * self.sim.control_rate)))
         self._refusal = self.robot.motion_refusal()
 
         p = self.cfg.prefixed
@@ -280,10 +282,8 @@ class UrSimNode(Node):
                 tau = self.sim.advance_free(state)
             else:
                 tau = self.sim.advance(state, sample, stop)
-            # Contacts are read only when something looks at them (they cost a force computation each).
-            watching = self._tool_contact.watching
-            contacts = self.sim.physics.contacts() if watching or self.robot.safety_mode != PROTECTIVE_STOP else ()
-            if watching:
+            contacts = self.sim.physics.contacts()  # measured over this cycle's physics steps
+            if self._tool_contact.watching:
                 halted = self._tool_contact.detect(contacts, self.sim.time)
                 if halted is not None:  # the robot cancels the motion: the next cycle brakes
                     commander.halt(self.sim.state().q, halted)
@@ -305,12 +305,12 @@ class UrSimNode(Node):
         self._cycle += 1
 
     def _safety_check(self, sample, contacts) -> str | None:
-        """Under the lock, after the physics step: the cause of a protective stop, or None."""
-        if self.robot.safety_mode == PROTECTIVE_STOP:
-            return None
-        p = self.sim.params
-        cause = contact_cause(contacts, self.cfg.protective_stop_force)
-        if cause is None:
+        """Under the lock, after the physics step: the cause of a protective stop, or None. The checks are armed
+        while the robot can move (RUNNING, NORMAL); see ``safety.py``."""
+        armed = self.robot.robot_mode == RUNNING and self.robot.safety_mode == NORMAL
+        cause = self.contact_safety.update(contacts, armed)
+        if cause is None and armed:
+            p = self.sim.params
             cause = limit_cause(self.sim.physics.positions(), sample.positions, p.q_min, p.q_max, self.joints)
         return cause
 

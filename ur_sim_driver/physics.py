@@ -84,11 +84,18 @@ class ArmPhysics:
         # and the name a contact report uses (the body, or the geom for bodies fixed to the world).
         root = int(m.body_rootid[self._base])
         self._robot_geom = m.body_rootid[m.geom_bodyid] == root
-        self._geom_label = [
+        geom_label = [
             mujoco.mj_id2name(m, mujoco.mjtObj.mjOBJ_BODY, int(b)) if b != 0
             else (mujoco.mj_id2name(m, mujoco.mjtObj.mjOBJ_GEOM, g) or f'geom {g}')
             for g, b in enumerate(m.geom_bodyid)]
+        # Contacts are summed per pair of labels: the labels numbered once, each geom mapped to its number.
+        self._labels = list(dict.fromkeys(geom_label))
+        self._geom_label_id = [self._labels.index(label) for label in geom_label]
         self._force6 = np.zeros(6)
+        # What the last control period's completed physics steps measured (contacts, flange wrench), averaged over
+        # its substeps (see step()).
+        self._contacts: tuple[Contact, ...] = ()
+        self._wrench = np.zeros(6)
         # MjData's arrays, fetched once: each attribute access builds a new array object (about 0.5 us), and the
         # loop reads a dozen of them every cycle. The arrays share MjData's memory, which never moves.
         d = self.data
@@ -115,6 +122,11 @@ class ArmPhysics:
         mujoco.mj_resetData(self.model, self.data)
         self.data.qpos[self._qpos] = q
         mujoco.mj_forward(self.model, self.data)
+        # mj_forward has solved the constraints of this state: its contacts and sensor readings belong together.
+        forces, depths = {}, {}
+        self._collect(forces, depths)
+        self._contacts = self._mean(forces, depths, 1)
+        self._wrench = -self._d_sensordata[self._ft]
         mujoco.mj_step1(self.model, self.data)
 
     @property
@@ -141,20 +153,32 @@ class ArmPhysics:
         return mass, bias
 
     def step(self, tau: np.ndarray) -> None:
-        """Apply joint torques `tau` (n,) [N m] for one control period (zero-order hold)."""
+        """Apply joint torques `tau` (n,) [N m] for one control period (zero-order hold).
+
+        Contacts and the flange's wrench are measured from each completed physics step (after mj_step2, whose
+        constraint forces, contacts and force-torque sensors belong to the state that step started from) and
+        averaged over the period's substeps: a robot's sensors see the period, not the solver's last iterate.
+        """
         # Invariant between calls: mj_step1 has run for the current state, so M, h and the TCP pose
         # read by the caller are those of the state the next torques act on.
         self._d_ctrl[self._act] = tau
+        m, d = self.model, self.data
+        wrench = np.zeros(6)
+        forces: dict[tuple[int, int], np.ndarray] = {}
+        depths: dict[tuple[int, int], float] = {}
         for _ in range(self.substeps):
-            mujoco.mj_step2(self.model, self.data)
-            mujoco.mj_step1(self.model, self.data)
+            mujoco.mj_step2(m, d)
+            wrench -= self._d_sensordata[self._ft]
+            if d.ncon:
+                self._collect(forces, depths)
+            mujoco.mj_step1(m, d)
+        self._wrench = wrench / self.substeps
+        self._contacts = self._mean(forces, depths, self.substeps) if forces else ()
 
-    def contacts(self) -> tuple[Contact, ...]:
-        """Contacts of the robot (arm and tool) with the scene or itself, in the current state."""
+    def _collect(self, forces: dict, depths: dict) -> None:
+        """Add this step's contact forces of the robot (world frame [N]) per pair of bodies to `forces`, and the
+        deepest penetration [m] per pair to `depths` (contacts and efc_force of one solved step)."""
         d = self.data
-        if d.ncon == 0:
-            return ()
-        found = []
         for i in range(d.ncon):
             c = d.contact[i]
             g1, g2 = int(c.geom1), int(c.geom2)
@@ -162,10 +186,26 @@ class ArmPhysics:
             if not (r1 or r2):
                 continue  # two scene bodies
             mujoco.mj_contactForce(self.model, d, i, self._force6)
-            part, other = (g1, g2) if r1 else (g2, g1)
-            found.append(Contact(self._geom_label[part], self._geom_label[other],
-                                 float(np.linalg.norm(self._force6[:3])), max(0.0, -float(c.dist))))
-        return tuple(found)
+            # The contact frame's rows are its normal and two tangents: its transpose maps the force to world axes.
+            f = c.frame.reshape(3, 3).T @ self._force6[:3]
+            key = (self._geom_label_id[g1], self._geom_label_id[g2]) if r1 else \
+                (self._geom_label_id[g2], self._geom_label_id[g1])
+            if key in forces:
+                forces[key] = forces[key] + f
+                depths[key] = max(depths[key], -float(c.dist))
+            else:
+                forces[key], depths[key] = f, -float(c.dist)
+
+    def _mean(self, forces: dict, depths: dict, steps: int) -> tuple[Contact, ...]:
+        labels = self._labels
+        return tuple(Contact(labels[a], labels[b], float(np.linalg.norm(f)) / steps, max(0.0, depths[a, b]))
+                     for (a, b), f in forces.items())
+
+    def contacts(self) -> tuple[Contact, ...]:
+        """Contacts of the robot (arm and tool) with the scene or itself over the last control period: one per pair
+        of bodies, its force the magnitude of the pair's total contact force averaged over the period's physics
+        steps [N], its depth the deepest penetration seen [m]."""
+        return self._contacts
 
     def tcp_pose(self) -> tuple[np.ndarray, np.ndarray]:
         """TCP pose in the base frame: position (3,) [m] and quaternion (4,) as (x, y, z, w)."""
@@ -175,12 +215,12 @@ class ArmPhysics:
 
     def wrench(self) -> np.ndarray:
         """(6,) force [N] and torque [N m] that the bodies beyond tool0 (tool, payload) exert on the arm,
-        about the tool0 origin, in tool0 axes, as of the last physics step.
+        about the tool0 origin, in tool0 axes, averaged over the last control period's physics steps.
 
         MuJoCo's force and torque sensors give the opposite: what the parent (the arm) exerts on the
         sensor's body and its subtree. Weight, contacts and the subtree's inertia all appear in it.
         """
-        return -self._d_sensordata[self._ft]
+        return self._wrench.copy()
 
     def body_id(self, name: str) -> int | None:
         """The MuJoCo id of body `name`, or None when the model has no such body."""

@@ -136,6 +136,10 @@ class RobotState:
         return None
 
     def power_off(self) -> str | None:
+        """Powers the arm off; a protective stop is cleared with the power, as a power cycle clears it on a robot."""
+        if self.safety_mode == PROTECTIVE_STOP:
+            self.safety_mode = NORMAL
+            self.stop_cause = ''
         self.robot_mode = POWER_OFF
         self._pending = []
         self.program_state = STOPPED

@@ -8,7 +8,7 @@ from typing import Any
 
 from ur_sim_driver.dispenser import DispenserParams, dispenser_params
 from ur_sim_driver.errors import ConfigError
-from ur_sim_driver.safety import DEFAULT_CONTACT_FORCE
+from ur_sim_driver.safety import DEFAULT_CONTACT_FORCE, DEFAULT_FORCE_WINDOW
 
 UR_TYPES = ('ur5', 'ur5e', 'ur10', 'ur10e')
 TOOLS = ('none', 'dispenser')
@@ -42,6 +42,7 @@ class SimConfig:
     start_powered_off: bool = False
     programs: tuple[str, ...] = ('wait_program.urp',)
     protective_stop_force: float = DEFAULT_CONTACT_FORCE
+    protective_stop_window: float = DEFAULT_FORCE_WINDOW  # [s] the safety system's mean of the contact force
     update_rate: float = 0.0
     physics_substeps: int = 0
     speed_scaling_initial_factor: float = 1.0
@@ -145,6 +146,8 @@ def sim_config_from_params(params: Mapping[str, Any]) -> SimConfig:
         protective_stop_force=_number('protective_stop_force', get('protective_stop_force',
                                                                    d.protective_stop_force), 0.0, 1e4,
                                       lo_open=True),
+        protective_stop_window=_number('protective_stop_window', get('protective_stop_window',
+                                                                     d.protective_stop_window), 0.0, 1.0),
         update_rate=update_rate,
         physics_substeps=substeps,
         speed_scaling_initial_factor=_number('speed_scaling_initial_factor',
