@@ -268,19 +268,25 @@ class RobotKeeper:
         p = h.sim.cfg.prefixed
         group = ReentrantCallbackGroup()
         names = ('dashboard_client/unlock_protective_stop', 'dashboard_client/power_on',
-                 'dashboard_client/brake_release', 'io_and_status_controller/resend_robot_program')
+                 'dashboard_client/power_off', 'dashboard_client/brake_release', 'dashboard_client/play',
+                 'io_and_status_controller/resend_robot_program')
         self._trigger = {n.split('/')[-1]: h.client.create_client(Trigger, p(n), callback_group=group) for n in names}
         for client in self._trigger.values():
             wait_still(client.service_is_ready, what=f'the service {client.srv_name}')
         self.cm = ControllerManagerClient(h)
         self.active = {name for name, state in self.cm.states().items() if state == 'active'}
 
-    def _call(self, name: str) -> str:
+    def call(self, name: str):
+        """Call the Trigger service `name` (unlock_protective_stop, power_on, power_off, brake_release, play,
+        resend_robot_program); its response."""
         from std_srvs.srv import Trigger
 
         future = self._trigger[name].call_async(Trigger.Request())
         wait_for(future.done, what=f'the answer of {name}')
-        answer = future.result()
+        return future.result()
+
+    def _call(self, name: str) -> str:
+        answer = self.call(name)
         assert answer.success, f'{name}: {answer.message}'
         return answer.message
 
