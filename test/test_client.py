@@ -1,4 +1,6 @@
 """The script client API against an in-process ur_sim (seed 2 preset names)."""
+import time
+
 import numpy as np
 import pytest
 from sim_harness import running_sim, wait_for
@@ -97,12 +99,15 @@ def test_a_built_goal_is_stamped_when_sent_and_its_answer_time_kept(sim_and_clie
     assert (goal.trajectory.header.stamp.sec, goal.trajectory.header.stamp.nanosec) == (0, 0)
     answered = len(ur.goal_answers)
     start = ur.start_time()
+    before = time.monotonic()
     handle = ur.send_goal(goal, start_time=start, wait=False)
+    within = time.monotonic() - before
     stamp = goal.trajectory.header.stamp
     assert stamp.sec + stamp.nanosec * 1e-9 == pytest.approx(start, abs=1e-9)
     assert len(ur.goal_answers) == answered + 1
     seconds, points = ur.goal_answers[-1]
-    assert 0.0 < seconds < 10.0 and points == 1
+    # The wall time from sending to the answer, taken within the call (not a bound on how long it may take).
+    assert 0.0 < seconds <= within and points == 1
     assert handle.wait(timeout=30).succeeded
 
 

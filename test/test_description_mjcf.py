@@ -3,7 +3,6 @@ actuators, collisions and static meshes."""
 
 import math
 import struct
-import time
 
 import mujoco
 import numpy as np
@@ -136,14 +135,13 @@ def test_self_collision_can_be_switched_off():
 
 
 @pytest.mark.parametrize('ur_type', UR_TYPES)
-def test_prefix_base_pose_and_load_time(ur_type):
+def test_prefix_and_base_pose(ur_type):
+    # How long building and loading takes is bench/bench_description.py's (`make bench`).
     p = load_ur_params(ur_type)
     base_pose = np.eye(4)
     base_pose[:3, 3] = (0.1, 0.2, 0.5)
     base_pose[:2, :2] = [[0.0, -1.0], [1.0, 0.0]]
-    start = time.perf_counter()
     mj = mujoco.MjModel.from_xml_string(build_mjcf(p, 'r_', DISPENSER, base_pose, timestep=0.001))
-    assert time.perf_counter() - start < 1.0
     md = mujoco.MjData(mj)
     mujoco.mj_forward(mj, md)
     assert md.ncon == 0  # stretched out, half a metre above the floor

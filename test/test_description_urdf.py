@@ -1,7 +1,6 @@
 """Generated URDF: frame tree, limits, inertials, and kinematics through Pinocchio."""
 
 import math
-import time
 import xml.etree.ElementTree as ET
 
 import numpy as np
@@ -135,8 +134,7 @@ def test_base_pose_places_base_link_in_world():
 
 
 @pytest.mark.parametrize('ur_type', UR_TYPES)
-def test_builds_and_loads_fast(ur_type):
-    start = time.perf_counter()
+def test_builds_and_loads_with_the_tool(ur_type):
+    # How long building and loading takes is bench/bench_description.py's (`make bench`).
     model = pin.buildModelFromXML(build_urdf(load_ur_params(ur_type), tool=DISPENSER))
-    assert time.perf_counter() - start < 1.0
     assert model.nq == 6

@@ -45,6 +45,8 @@ def test_no_answer_within_the_timeout_names_the_service_pin_and_requests():
         node = Node('lonely_gun', context=ctx)  # no io_and_status_controller in this context
         with executor_with(ctx, node):
             gun = DispenserIO(node, STATE)
+            # How many requests go out in the 0.3 s follows the machine's pace (one every 0.1 s when idle): named,
+            # not counted.
             with pytest.raises(ClientError, match=r'/io_and_status_controller/set_io: no answer to switching pin '
-                                                  r'16 off within 0\.3 s \([3-4] requests sent\)'):
+                                                  r'16 off within 0\.3 s \([1-9]\d* requests sent\)'):
                 gun.off(PIN, timeout=0.3, resend=0.1)

@@ -12,6 +12,10 @@ from ur_glue_planner.execution.node import run_job
 from ur_sim_driver.scene import config_dir
 
 V = 0.15
+# Two whole glue jobs in real time (2 x 23.6 s of motion), their reports and the video are the `demo` fixture, set up
+# in whichever test of this module runs first: 90 s on an idle 2-core machine, and the motion cannot go faster.
+# Twice the default timeout (pytest.ini), for a loaded machine.
+pytestmark = pytest.mark.timeout(600)
 
 
 @pytest.fixture(scope='module')

@@ -108,10 +108,10 @@ def test_the_top_left_corner_is_slowed_down_for_the_elbow(plan, path):
     assert plan.retimes >= 1
 
 
-def test_ik_of_all_samples_is_fast(plan):
-    # the closed form meets 1e-6 m/rad without a Newton step (only the first sample starts from the guess)
+def test_ik_of_all_samples_needs_no_newton_step(plan):
+    # the closed form meets 1e-6 m/rad without a Newton step (only the first sample starts from the guess); its
+    # wall time is bench_planner's (`make bench`: planning.ik_all_samples_ms)
     assert np.mean(plan.ik_iterations) < 1.0
-    assert plan.ik_seconds < 0.5  # ~0.006 s on the development machine (bench_planner); loose for shared CI cores
 
 
 def test_a_velocity_limit_is_met_by_slowing_down(kin, path):

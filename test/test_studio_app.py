@@ -1,6 +1,4 @@
 """The studio's page logic without a browser or ROS: picking, keys, the gizmo, plan and playback, save."""
-import time
-
 import numpy as np
 import pytest
 import yaml
@@ -65,9 +63,8 @@ def test_plan_playback_and_save(studio, tmp_path):
     plan = studio.plan_now()
     assert plan is not None and studio.timeline.duration == pytest.approx(plan.summary.total_duration)
     studio._on_play('play')
-    t0 = time.monotonic()
+    # The clock plays (its wall seconds -> plan seconds are test_studio_playback's Clock tests, without a clock).
     wait_until(lambda: studio.clock.t > 0.3, 'the playback clock')
-    assert studio.clock.t <= (time.monotonic() - t0) * studio.clock.speed + 0.1
     studio._on_play('pause')
     path = studio.save(tmp_path / 'job.yaml')
     raw = yaml.safe_load(path.read_text())

