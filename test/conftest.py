@@ -12,6 +12,8 @@ import sys
 import tempfile
 from pathlib import Path
 
+import pytest
+
 _DOMAIN_LOCK_DIR = Path(tempfile.gettempdir()) / 'ur_sim_driver_test_domains'
 _held_lock = None  # keeps the lock file open (and the domain reserved) until the process exits
 
@@ -52,3 +54,14 @@ def pytest_configure(config) -> None:
 
 def pytest_report_header(config) -> str:
     return f"ROS_DOMAIN_ID={os.environ.get('ROS_DOMAIN_ID')} ROS_LOG_DIR={os.environ.get('ROS_LOG_DIR')}"
+
+
+@pytest.fixture(autouse=True)
+def robot_recovered():
+    """After every test: each simulation still running (a module fixture's) brought back as a user would bring
+    the robot back (``sim_harness.RobotKeeper``): safety, power, program and controllers."""
+    yield
+    from sim_harness import open_harnesses
+
+    for harness in open_harnesses():
+        harness.keeper.recover()

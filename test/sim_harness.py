@@ -50,6 +50,12 @@ class Lockstep:
 
 
 _lockstep: list[Lockstep] = []  # the running lockstep simulations, innermost last
+_open: list[SimHarness] = []  # the harnesses of running simulations, oldest first
+
+
+def open_harnesses() -> list[SimHarness]:
+    """The harnesses of the simulations running now (a module fixture's, a test's own)."""
+    return list(_open)
 
 
 def wait_for(condition, timeout: float = TIMEOUT, what: str = 'condition') -> None:
@@ -124,6 +130,7 @@ class SimHarness:
         self.topic = _HandedOver(client.create_publisher(JointTrajectory, p(f'{ctrl}/joint_trajectory'), 10), sim)
         self.scaling = client.create_publisher(SpeedScalingFactor, p(f'{ctrl}/speed_scaling_input'), 10)
         self.recording: Recording | None = None
+        self.keeper: RobotKeeper | None = None  # set by running_sim: brings the robot back after each test
         self._js_topic = p('joint_states')
         self._scaling_topic = p('speed_scaling_state_broadcaster/speed_scaling')
         self._recorder: Node | None = None
@@ -258,7 +265,8 @@ class RobotKeeper:
     """Brings the robot back as a user would, over the driver's services: a protective stop unlocked through the
     dashboard once the robot allows it (5 s after the stop), power and brakes through the dashboard, the External
     Control program through resend_robot_program, and the controllers that were active when this keeper was made.
-    For fixtures: call :meth:`recover` in their teardown (or between the tests they serve)."""
+    ``running_sim`` makes one for every simulation, and ``conftest.py`` recovers every running simulation after
+    each test, so that a module's tests start from a working robot whatever the one before did."""
 
     def __init__(self, h: SimHarness) -> None:
         from cm_helpers import ControllerManagerClient
@@ -376,11 +384,15 @@ def running_sim(lockstep: bool | None = None, **params) -> Iterator[SimHarness]:
             _lockstep.append(Lockstep(sim))
         try:
             harness = SimHarness(sim, client)
+            harness.keeper = RobotKeeper(harness)
+            _open.append(harness)
             yield harness
         finally:
             if lockstep:
                 _lockstep.pop()
             if harness is not None:
+                if harness in _open:
+                    _open.remove(harness)
                 harness.close()
             sim.shutdown()
             spinner.stop()

@@ -14,7 +14,8 @@ PRESET = dict(ur_type='ur10', namespace='/ur10', controller_name='vel_based_pos_
 
 @pytest.fixture(scope='module')
 def sim_and_client():
-    with running_sim(**PRESET) as h:
+    # Free-running: the client library under test waits on its own (wall-clock) deadlines.
+    with running_sim(lockstep=False, **PRESET) as h:
         client = URClient(namespace='/ur10', controller_name='vel_based_pos_traj_controller',
                           context=h.client.context, node_name='test_ur_client')
         try:

@@ -56,7 +56,7 @@ def _unlock_and_play(h, dashboard: RobotKeeper) -> None:
 
 def test_the_elbow_driven_into_the_arm_is_unlocked_and_moved_away():
     with running_sim(ur_type='ur5e') as h:
-        dashboard = RobotKeeper(h)
+        dashboard = h.keeper
         cause = _collide(h, ELBOW_INTO_ARM, 4.0)
         assert cause.startswith('contact between upper_arm_link and wrist_'), cause  # the arm against itself
         _unlock_and_play(h, dashboard)
@@ -76,7 +76,7 @@ def test_the_arm_driven_into_the_table_is_unlocked_and_moved_away():
     # At a moderate speed: driven into the table at full speed, the wrist joints give way to the contact (their 28 N m
     # against some 200 N) and the arm folds on along the table after the stop, which no unlock survives.
     with running_sim(ur_type='ur5e') as h:
-        dashboard = RobotKeeper(h)
+        dashboard = h.keeper
         cause = _collide(h, INTO_TABLE, 10.0)
         assert ' and floor: force ' in cause, cause
         _unlock_and_play(h, dashboard)
@@ -86,7 +86,7 @@ def test_the_arm_driven_into_the_table_is_unlocked_and_moved_away():
 def test_the_nozzle_driven_into_the_glass_is_unlocked_and_moved_away():
     job = load_job(default_job_path())
     with running_sim(ur_type=job.ur_type, tool='dispenser', scene='windshield') as h:
-        dashboard = RobotKeeper(h)
+        dashboard = h.keeper
         kin = ur_kinematics(job.ur_type, job.tool)
         seg = touch_move(kin, plan_job(job, h.q).bead.q[0], tool_axis(job.tool), height=0.02, depth=0.02,
                          speed=0.15, dt=job.sample_time)

@@ -11,7 +11,7 @@ from cm_helpers import BEST_EFFORT, ControllerManagerClient
 from control_msgs.action import FollowJointTrajectory
 from rclpy.action import ActionClient
 from rclpy.callback_groups import ReentrantCallbackGroup
-from sim_harness import RobotKeeper, running_sim, wait_for, wait_still
+from sim_harness import running_sim, wait_for, wait_still
 from ur_msgs.action import ToolContact
 
 from ur_glue_planner.execution.ros_conversions import joint_trajectory
@@ -73,15 +73,7 @@ def scene():
         kin = ur_kinematics(job.ur_type, job.tool)
         seg = touch_move(kin, plan.bead.q[0], tool_axis(job.tool), height=0.01, depth=0.01, speed=TOUCH_SPEED,
                          dt=job.sample_time)
-        yield h, seg, ControllerManagerClient(h), ToolContactClient(h), RobotKeeper(h)
-
-
-@pytest.fixture(autouse=True)
-def recovered(request):
-    """After each test that used the scene: the robot able to move again, the controllers as at the start."""
-    yield
-    if 'scene' in request.fixturenames:
-        request.getfixturevalue('scene')[-1].recover()
+        yield h, seg, ControllerManagerClient(h), ToolContactClient(h)
 
 
 def move_to_start(h, seg) -> None:
@@ -93,7 +85,7 @@ def move_to_start(h, seg) -> None:
 
 
 def test_goal_rules(scene):
-    h, seg, cm, tc, _ = scene
+    h, seg, cm, tc = scene
     assert cm.controllers()[NAME].claimed_interfaces == []
     assert not tc.send().accepted  # inactive
     assert cm.switch(activate=[NAME], strictness=BEST_EFFORT).ok
@@ -115,7 +107,7 @@ def test_goal_rules(scene):
 
 
 def test_touching_the_glass_with_a_goal_stops_within_one_period_without_protective_stop(scene):
-    h, seg, cm, tc, _ = scene
+    h, seg, cm, tc = scene
     move_to_start(h, seg)
     assert cm.switch(activate=[NAME]).ok
     contact_goal = tc.send()
@@ -163,7 +155,7 @@ def test_touching_the_glass_with_a_goal_stops_within_one_period_without_protecti
 
 
 def test_a_passthrough_trajectory_is_aborted_by_the_robot(scene):
-    h, seg, cm, tc, _ = scene
+    h, seg, cm, tc = scene
     move_to_start(h, seg)
     passthrough = 'passthrough_trajectory_controller'
     assert cm.switch(activate=[passthrough, NAME], deactivate=['scaled_joint_trajectory_controller']).ok
@@ -186,7 +178,7 @@ def test_a_passthrough_trajectory_is_aborted_by_the_robot(scene):
 
 
 def test_without_a_goal_the_same_move_ends_in_a_protective_stop(scene):
-    h, seg, cm, tc, _ = scene
+    h, seg, cm, tc = scene
     move_to_start(h, seg)
     assert cm.switch(activate=[NAME]).ok  # active, but no goal: nothing watches the tool
     handle = h.send(goal_of(h, seg))
@@ -201,7 +193,7 @@ def test_without_a_goal_the_same_move_ends_in_a_protective_stop(scene):
 def test_a_slow_approach_ends_in_tool_contact_never_in_a_protective_stop(scene, run):
     """Approaches at 5 to 50 mm/s from 3 to 12 mm above the glass, each started at another phase of the physics
     steps: the tool contact stops the arm every time, the safety system never does."""
-    h, _, cm, tc, _ = scene
+    h, _, cm, tc = scene
     job = dataclasses.replace(load_job(default_job_path()), ur_type='ur5e')
     kin = ur_kinematics(job.ur_type, job.tool)
     speed = 0.005 + 0.045 * run / 19  # [m/s]

@@ -34,7 +34,8 @@ def long_trajectory(names, q0, n=N, dt=0.001) -> JointTrajectory:
 
 @pytest.fixture(scope='module')
 def h():
-    with running_sim() as harness:
+    # Free-running: the subject is the simulation going on while another process takes a long trajectory in.
+    with running_sim(lockstep=False) as harness:
         yield harness
 
 
