@@ -71,9 +71,14 @@ def test_messages_to_the_inactive_controller_are_ignored(rig):
     assert np.abs(moved).max() < 1e-3, moved
 
 
+def in_charge(cm) -> None:
+    """freedrive_mode_controller takes the joints (each test starts with the driver's controllers, conftest.py)."""
+    assert cm.switch(activate=[NAME], deactivate=[SCALED]).ok
+
+
 def test_freedrive_moves_under_the_push_and_stays(rig):
     h, cm, enable, wrench, freedrive = rig
-    assert cm.states()[NAME] == 'active'
+    in_charge(cm)
     set_freedrive(h, enable, freedrive, True)
     enable.publish(Bool(data=True))
     moved = push(h, wrench)
@@ -92,6 +97,7 @@ def test_freedrive_moves_under_the_push_and_stays(rig):
 
 def test_freedrive_ends_when_the_messages_stop(rig):
     h, cm, enable, wrench, freedrive = rig
+    in_charge(cm)
     freedrive.inactive_timeout = 0.5  # [s] of wall time (upstream's default is 10 s)
     try:
         # Not before the timeout: taken before the message is sent, so the bound holds however slow the machine
@@ -106,6 +112,7 @@ def test_freedrive_ends_when_the_messages_stop(rig):
 
 def test_deactivation_ends_freedrive(rig):
     h, cm, enable, wrench, freedrive = rig
+    in_charge(cm)
     set_freedrive(h, enable, freedrive, True)
     assert cm.switch(activate=[SCALED], deactivate=[NAME]).ok
     assert not freedrive.free
