@@ -127,8 +127,11 @@ class SimHarness:
         # Its own group: a busy subscription of the client node must never hold up goal responses.
         self.action = ActionClient(client, FollowJointTrajectory, p(f'{ctrl}/follow_joint_trajectory'),
                                    callback_group=ReentrantCallbackGroup())
-        self.topic = _HandedOver(client.create_publisher(JointTrajectory, p(f'{ctrl}/joint_trajectory'), 10), sim)
-        self.scaling = client.create_publisher(SpeedScalingFactor, p(f'{ctrl}/speed_scaling_input'), 10)
+        self.topic = _HandedOver(client.create_publisher(JointTrajectory, p(f'{ctrl}/joint_trajectory'), 10),
+                                 lambda: sim.commands_received, 'the joint_trajectory message at ur_sim')
+        controller = sim._trajectory[ctrl]
+        self.scaling = _HandedOver(client.create_publisher(SpeedScalingFactor, p(f'{ctrl}/speed_scaling_input'), 10),
+                                   lambda: controller.speed_scaling_received, 'the speed_scaling_input message')
         self.recording: Recording | None = None
         self.keeper: RobotKeeper | None = None  # set by running_sim: brings the robot back after each test
         self._js_topic = p('joint_states')
@@ -320,17 +323,18 @@ class RobotKeeper:
 
 
 class _HandedOver:
-    """A joint_trajectory publisher whose publish() returns once ur_sim has the message (started or dropped),
-    holding a lockstep simulation still meanwhile; anything else is the publisher's."""
+    """A publisher whose publish() returns once ur_sim has handled the message (`handled()`, a count, grew), holding
+    a lockstep simulation still meanwhile; anything else is the publisher's."""
 
-    def __init__(self, publisher, sim: UrSimNode) -> None:
+    def __init__(self, publisher, handled, what: str) -> None:
         self._publisher = publisher
-        self._sim = sim
+        self._handled = handled
+        self._what = what
 
     def publish(self, msg) -> None:
-        before = self._sim.commands_received
+        before = self._handled()
         self._publisher.publish(msg)
-        wait_still(lambda: self._sim.commands_received > before, what='the joint_trajectory message at ur_sim')
+        wait_still(lambda: self._handled() > before, what=self._what)
 
     def __getattr__(self, name):
         return getattr(self._publisher, name)

@@ -73,6 +73,7 @@ class JointTrajectoryControllerComponent(JointCommandController):
         self._feedback_every = max(1, feedback_every)
         self._token = None
         self._settled: threading.Event | None = None
+        self.speed_scaling_received = 0  # speed_scaling_input messages handled
 
     def interfaces(self, cfg: SimConfig) -> tuple[tuple[str, ...], tuple[str, ...]]:
         joints = prefixed_joints(cfg.joints, cfg.tf_prefix)
@@ -192,13 +193,17 @@ class JointTrajectoryControllerComponent(JointCommandController):
 
     # ---- ROS callbacks (executor threads) -------------------------------------------------------------------------
     def _on_speed_scaling(self, msg: SpeedScalingFactor) -> None:
-        f = msg.factor
-        if not (0.0 <= f <= 1.0):
-            self.node.get_logger().error(f'Ignored speed_scaling_input: factor = {f} is outside [0.0, 1.0]; '
-                                         f'keeping {self.core.speed_scaling}')
-            return
-        with self.host.lock:
-            self.core.speed_scaling = float(f)
+        try:
+            f = msg.factor
+            if not (0.0 <= f <= 1.0):
+                self.node.get_logger().error(f'Ignored speed_scaling_input: factor = {f} is outside [0.0, 1.0]; '
+                                             f'keeping {self.core.speed_scaling}')
+                return
+            with self.host.lock:
+                self.core.speed_scaling = float(f)
+        finally:
+            # Counted once handled (applied or ignored): a script that steps the simulation itself waits for it.
+            self.speed_scaling_received += 1
 
     def _on_query(self, request: QueryTrajectoryState.Request,
                   response: QueryTrajectoryState.Response) -> QueryTrajectoryState.Response:
