@@ -240,11 +240,12 @@ class SimHarness:
         g.goal_time_tolerance = duration(goal_time)
         return g
 
-    def send(self, goal, feedback=None):
-        """Send a goal and wait for the server's answer, and for an accepted goal's arrival at its controller, with
-        a lockstep simulation held still; returns the goal handle (check .accepted)."""
+    def send(self, goal, feedback=None, client=None):
+        """Send a goal (to `client`, default the scaled trajectory controller's action) and wait for the server's
+        answer, and for an accepted goal's arrival at its controller, with a lockstep simulation held still;
+        returns the goal handle (check .accepted)."""
         before = self.sim.commands_received
-        future = self.action.send_goal_async(goal, feedback_callback=feedback)
+        future = (client or self.action).send_goal_async(goal, feedback_callback=feedback)
         wait_still(future.done, what='the goal response')
         handle = future.result()
         if handle.accepted:
@@ -285,6 +286,10 @@ class RobotKeeper:
         for client in self._trigger.values():
             wait_still(client.service_is_ready, what=f'the service {client.srv_name}')
         self.cm = ControllerManagerClient(h)
+        self.remember()
+
+    def remember(self) -> None:
+        """The controllers active now are the ones to restore (for a fixture that switched them in its set-up)."""
         self.active = {name for name, state in self.cm.states().items() if state == 'active'}
 
     def call(self, name: str):

@@ -30,13 +30,12 @@ def rig():
         wait_still(client.server_is_ready, what='the passthrough action server')
         # The driver's tests launch with start_joint_controller false: no joint controller is active.
         assert cm.switch(deactivate=['scaled_joint_trajectory_controller']).ok
+        h.keeper.remember()
         yield h, cm, client
 
 
-def send(client, goal):
-    future = client.send_goal_async(goal)
-    wait_for(future.done, what='the goal response')
-    return future.result()
+def send(h, client, goal):
+    return h.send(goal, client=client)
 
 
 def result(handle, timeout: float = 60.0):
@@ -63,7 +62,7 @@ def activate(cm) -> None:
 def test_inactive_controller_rejects_goals(rig):
     h, cm, client = rig
     assert cm.states()[NAME] == 'inactive'
-    assert not send(client, goal(h)).accepted
+    assert not send(h, client, goal(h)).accepted
 
 
 def test_passthrough_trajectory(rig):
@@ -71,7 +70,7 @@ def test_passthrough_trajectory(rig):
     activate(cm)
     assert cm.states()[NAME] == 'active'
     rec = h.record()
-    handle = send(client, goal(h, position_tol=0.01, goal_time=1.0))
+    handle = send(h, client, goal(h, position_tol=0.01, goal_time=1.0))
     assert handle.accepted
     status, code, text = result(handle)
     h.stop_recording()
@@ -89,7 +88,7 @@ def test_passthrough_trajectory(rig):
 def test_quintic_trajectory(rig):
     h, cm, client = rig
     activate(cm)
-    handle = send(client, goal(h, velocities=True, accelerations=True, position_tol=0.01, velocity_tol=0.01,
+    handle = send(h, client, goal(h, velocities=True, accelerations=True, position_tol=0.01, velocity_tol=0.01,
                                goal_time=1.0))
     assert handle.accepted
     status, code, text = result(handle)
@@ -99,7 +98,7 @@ def test_quintic_trajectory(rig):
 def test_impossible_goal_tolerance_fails(rig):
     h, cm, client = rig
     activate(cm)
-    handle = send(client, goal(h, position_tol=1e-9, goal_time=1.0))
+    handle = send(h, client, goal(h, position_tol=1e-9, goal_time=1.0))
     assert handle.accepted
     status, code, text = result(handle)
     assert (status, code, text) == (GoalStatus.STATUS_ABORTED, rc.GOAL_TOLERANCE_VIOLATED,
@@ -109,7 +108,7 @@ def test_impossible_goal_tolerance_fails(rig):
 def test_impossible_goal_time_tolerance_fails(rig):
     h, cm, client = rig
     activate(cm)
-    handle = send(client, goal(h, position_tol=0.01, goal_time=1e-8))
+    handle = send(h, client, goal(h, position_tol=0.01, goal_time=1e-8))
     assert handle.accepted
     status, code, text = result(handle)
     assert (status, code) == (GoalStatus.STATUS_ABORTED, rc.GOAL_TOLERANCE_VIOLATED)
@@ -120,12 +119,12 @@ def test_rules_busy_partial_and_cancel(rig):
     h, cm, client = rig
     activate(cm)
     # Every joint is required, and goal tolerances name every joint or none.
-    assert not send(client, h.goal([point(HOME[:5], 4.0)], names=h.joints[:5])).accepted
+    assert not send(h, client, h.goal([point(HOME[:5], 4.0)], names=h.joints[:5])).accepted
     partial_tol = h.goal([point(HOME, 4.0)], goal_tol=[(h.joints[0], 0.01, 0.0, 0.0)])
-    assert not send(client, partial_tol).accepted
-    first = send(client, goal(h))
+    assert not send(h, client, partial_tol).accepted
+    first = send(h, client, goal(h))
     assert first.accepted
-    assert not send(client, goal(h)).accepted  # no preemption: a trajectory is executing
+    assert not send(h, client, goal(h)).accepted  # no preemption: a trajectory is executing
     h.wait_sim_time(2.0)
     future = first.cancel_goal_async()
     wait_for(future.done, what='the cancel answer')
