@@ -12,7 +12,7 @@ demo: setup
 
 test: setup
 	@$(ENV) ruff check .
-	@$(ENV) python -m pytest test
+	@$(ENV) python -m pytest test -n 2 --dist loadfile
 
 lint: setup
 	@$(ENV) ruff check .

@@ -4,7 +4,7 @@ from __future__ import annotations
 from builtin_interfaces.msg import Duration
 from controller_manager_msgs.srv import ListControllers, ListControllerTypes, ListHardwareInterfaces, SwitchController
 from rclpy.callback_groups import ReentrantCallbackGroup
-from sim_harness import SimHarness, wait_for, wait_still
+from sim_harness import SimHarness, wait_answer, wait_still
 
 STRICT = SwitchController.Request.STRICT
 BEST_EFFORT = SwitchController.Request.BEST_EFFORT
@@ -30,9 +30,7 @@ class ControllerManagerClient:
 
     @staticmethod
     def _call(client, request):
-        future = client.call_async(request)
-        wait_for(future.done, what=f'the answer of {client.srv_name}')
-        return future.result()
+        return wait_answer(client.call_async(request), f'the answer of {client.srv_name}')
 
     def switch(self, activate=(), deactivate=(), strictness=STRICT, timeout: float = 0.0):
         """The SwitchController response (ok, message)."""

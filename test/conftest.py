@@ -38,7 +38,8 @@ def _reserve_domain_id() -> int:
 
 
 def pytest_configure(config) -> None:
-    if 'UR_SIM_TEST_DOMAIN_ID' not in os.environ:
+    # pytest-xdist's workers inherit the environment of the process that started them: each takes its own domain.
+    if 'UR_SIM_TEST_DOMAIN_ID' not in os.environ or 'PYTEST_XDIST_WORKER' in os.environ:
         os.environ['UR_SIM_TEST_DOMAIN_ID'] = str(_reserve_domain_id())
     os.environ['ROS_DOMAIN_ID'] = os.environ['UR_SIM_TEST_DOMAIN_ID']
     os.environ['ROS_AUTOMATIC_DISCOVERY_RANGE'] = 'LOCALHOST'

@@ -73,6 +73,23 @@ def wait_for(condition, timeout: float = TIMEOUT, what: str = 'condition') -> No
     wait_still(condition, timeout, what)
 
 
+def wait_answer(future, what: str = 'the answer', timeout: float = TIMEOUT):
+    """Wait for a service's answer and return it. A lockstep simulation steps one control cycle per half millisecond
+    of wall time meanwhile: a request may need a cycle (a controller switch is applied in one), while the answer's
+    way back is DDS's, on the wall clock. The deadline is wall time, a guard against a hang."""
+    if not _lockstep:
+        wait_still(future.done, timeout, what)
+        return future.result()
+    lockstep = _lockstep[-1]
+    deadline = time.monotonic() + timeout
+    while not future.done():
+        if time.monotonic() > deadline:
+            raise TimeoutError(f'timed out after {timeout:.0f} s waiting for {what}')
+        lockstep.step()
+        time.sleep(0.0005)
+    return future.result()
+
+
 def wait_still(condition, timeout: float = TIMEOUT, what: str = 'condition') -> None:
     """Wait until `condition()` is true without stepping a lockstep simulation: for delivery (discovery, a goal's
     answer, a message reaching ur_sim). The deadline is wall time, a guard against a hang."""
@@ -268,7 +285,9 @@ class SimHarness:
 class RobotKeeper:
     """Brings the robot back as a user would, over the driver's services: a protective stop unlocked through the
     dashboard once the robot allows it (5 s after the stop), power and brakes through the dashboard, the External
-    Control program through resend_robot_program, and the controllers that were active when this keeper was made.
+    Control program through resend_robot_program, the controllers that were active when this keeper was made, and
+    through io_and_status_controller the outputs (digital, analog, tool voltage), the payload and the speed slider as
+    they were then. The pose is each test's to set up (a move back could itself collide).
     ``running_sim`` makes one for every simulation, and ``conftest.py`` recovers every running simulation after
     each test, so that a module's tests start from a working robot whatever the one before did."""
 
@@ -285,8 +304,21 @@ class RobotKeeper:
         self._trigger = {n.split('/')[-1]: h.client.create_client(Trigger, p(n), callback_group=group) for n in names}
         for client in self._trigger.values():
             wait_still(client.service_is_ready, what=f'the service {client.srv_name}')
+        from ur_msgs.srv import SetAnalogOutput, SetIO, SetPayload, SetSpeedSliderFraction
+
+        self._set_io = h.client.create_client(SetIO, p('io_and_status_controller/set_io'), callback_group=group)
+        self._set_analog = h.client.create_client(SetAnalogOutput, p('io_and_status_controller/set_analog_output'),
+                                                  callback_group=group)
+        self._set_payload = h.client.create_client(SetPayload, p('io_and_status_controller/set_payload'),
+                                                   callback_group=group)
+        self._set_slider = h.client.create_client(SetSpeedSliderFraction,
+                                                  p('io_and_status_controller/set_speed_slider'), callback_group=group)
+        for client in (self._set_io, self._set_analog, self._set_payload, self._set_slider):
+            wait_still(client.service_is_ready, what=f'the service {client.srv_name}')
         self.cm = ControllerManagerClient(h)
         self.remember()
+        sim = h.sim
+        self.io, self.payload, self.slider = sim.sim.io, sim.sim.payload, sim.scaling.slider
 
     def remember(self) -> None:
         """The controllers active now are the ones to restore (for a fixture that switched them in its set-up)."""
@@ -297,9 +329,7 @@ class RobotKeeper:
         resend_robot_program); its response."""
         from std_srvs.srv import Trigger
 
-        future = self._trigger[name].call_async(Trigger.Request())
-        wait_for(future.done, what=f'the answer of {name}')
-        return future.result()
+        return wait_answer(self._trigger[name].call_async(Trigger.Request()), f'the answer of {name}')
 
     def _call(self, name: str) -> str:
         answer = self.call(name)
@@ -325,6 +355,49 @@ class RobotKeeper:
         if now != self.active:
             answer = self.cm.switch(activate=sorted(self.active - now), deactivate=sorted(now - self.active))
             assert answer.ok, answer
+        self._restore_io()
+        self._restore_payload()
+        if self.h.sim.scaling.slider != self.slider:
+            from ur_msgs.srv import SetSpeedSliderFraction
+
+            self._answer(self._set_slider, SetSpeedSliderFraction.Request(speed_slider_fraction=self.slider))
+
+    def _answer(self, client, request) -> None:
+        answer = wait_answer(client.call_async(request), f'the answer of {client.srv_name}')
+        assert answer.success, f'{client.srv_name} refused {request}'
+
+    def _restore_io(self) -> None:
+        from ur_msgs.msg import Analog
+        from ur_msgs.srv import SetAnalogOutput, SetIO
+
+        from ur_sim_driver.io_bank import SPAN
+
+        io, was = self.h.sim.sim.io, self.io
+        for pin, (now, then) in enumerate(zip(io.digital_out, was.digital_out)):
+            if now != then:
+                self._answer(self._set_io, SetIO.Request(fun=SetIO.Request.FUN_SET_DIGITAL_OUT, pin=pin,
+                                                         state=float(then)))
+        for pin in range(len(was.analog_out)):
+            if (io.analog_out[pin], io.analog_out_domain[pin]) != (was.analog_out[pin], was.analog_out_domain[pin]):
+                lo, hi = SPAN[was.analog_out_domain[pin]]
+                data = Analog(pin=pin, domain=was.analog_out_domain[pin], state=(was.analog_out[pin] - lo) / (hi - lo))
+                self._answer(self._set_analog, SetAnalogOutput.Request(data=data))
+        if io.tool_voltage != was.tool_voltage:
+            self._answer(self._set_io, SetIO.Request(fun=SetIO.Request.FUN_SET_TOOL_VOLTAGE,
+                                                     state=float(was.tool_voltage)))
+
+    def _restore_payload(self) -> None:
+        from ur_msgs.srv import SetPayload
+
+        now, then = self.h.sim.sim.payload, self.payload
+        if now is then:
+            return
+        request = SetPayload.Request(mass=float(then.mass))
+        request.center_of_gravity.x, request.center_of_gravity.y, request.center_of_gravity.z = map(float, then.cog)
+        (request.ixx, request.iyy, request.izz, request.ixy, request.ixz,
+         request.iyz) = map(float, then.inertia)
+        self._answer(self._set_payload, request)
+        wait_for(lambda: self.h.sim.sim.payload.mass == then.mass, what='the payload back')
 
 
 class _HandedOver:

@@ -8,7 +8,7 @@ import time
 import numpy as np
 import pytest
 from action_msgs.msg import GoalStatus
-from sim_harness import TIMEOUT, point, running_sim, trajectory, wait_for, wait_still
+from sim_harness import TIMEOUT, point, running_sim, trajectory, wait_answer, wait_for, wait_still
 from std_srvs.srv import Trigger
 from ur_dashboard_msgs.msg import RobotMode, SafetyMode
 from ur_dashboard_msgs.srv import (
@@ -52,9 +52,7 @@ class Dashboard:
     def call(self, name: str, **fields):
         client = self.clients[name]
         request = (TYPED.get(name) or Trigger).Request(**fields)
-        future = client.call_async(request)
-        wait_for(future.done, what=f'the answer of /dashboard_client/{name}')
-        return future.result()
+        return wait_answer(client.call_async(request), f'the answer of /dashboard_client/{name}')
 
     def ok(self, name: str, **fields):
         response = self.call(name, **fields)

@@ -20,8 +20,10 @@ PRESET = dict(ur_type='ur10', namespace='/ur10', controller_name='vel_based_pos_
 
 @pytest.fixture(scope='module')
 def ur():
-    # Free-running: the seed 2 examples wait on the client library's own (wall-clock) deadlines.
-    with running_sim(lockstep=False, **PRESET) as h:
+    # In real time, as a user runs them: the examples stamp their trajectories 1 s of wall time ahead and wait on the
+    # client library's own (wall-clock) deadlines; as fast as possible, a message delayed by a loaded machine
+    # arrived after its whole trajectory's time and was dropped (task 12 never moved, under pytest-xdist).
+    with running_sim(real_time_factor=1.0, **PRESET) as h:
         client = seed.connect(context=h.client.context, node_name='example_client')
         try:
             yield client

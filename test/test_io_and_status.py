@@ -11,7 +11,7 @@ import threading
 import numpy as np
 import pytest
 from geometry_msgs.msg import Vector3
-from sim_harness import point, running_sim, wait_for, wait_still
+from sim_harness import point, running_sim, wait_answer, wait_for, wait_still
 from std_msgs.msg import Bool, Float64
 from std_srvs.srv import Trigger
 from test_payload import pinocchio_gravity
@@ -59,9 +59,7 @@ def client_for(h, srv_type, name: str):
 
 
 def call(h, srv_type, name: str, request, timeout: float = 10.0):
-    future = client_for(h, srv_type, name).call_async(request)
-    wait_for(future.done, timeout, f'the answer of {name}')
-    return future.result()
+    return wait_answer(client_for(h, srv_type, name).call_async(request), f'the answer of {name}', timeout)
 
 
 def set_io(h, fun: int, pin: int, state: float) -> bool:

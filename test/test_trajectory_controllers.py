@@ -10,7 +10,7 @@ from control_msgs.action import FollowJointTrajectory
 from control_msgs.msg import JointTrajectoryControllerState
 from control_msgs.srv import QueryTrajectoryState
 from rclpy.callback_groups import ReentrantCallbackGroup
-from sim_harness import point, running_sim, wait_for, wait_still
+from sim_harness import point, running_sim, wait_answer, wait_for, wait_still
 
 from ur_glue_planner.execution.action_client import ActionClient
 from ur_sim_driver import conversions as conv
@@ -44,9 +44,8 @@ def _run(h, name, goal):
 
 
 def _query(h, name, t):
-    future = h.query[name].call_async(QueryTrajectoryState.Request(time=conv.sec_to_time(t)))
-    wait_for(future.done, what='query_state')
-    return future.result()
+    return wait_answer(h.query[name].call_async(QueryTrajectoryState.Request(time=conv.sec_to_time(t))),
+                       'query_state')
 
 
 def test_one_rad_in_half_a_second_scaled_slows_down_unscaled_violates_the_path(robot):
