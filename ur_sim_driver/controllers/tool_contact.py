@@ -8,9 +8,11 @@ inactive and while a goal is active; cancel ends the goal canceled; deactivation
 claims only ``<tf_prefix>tool_contact/tool_contact_set_state``, so it runs beside a trajectory or forward
 controller (``ur_hardware.py``); CB3 robots refuse it.
 
-How ur_sim detects the contact: after every physics step, a MuJoCo contact of a body of the tool or the flange
-(the subtree of ``wrist_3_link``) with a force above :data:`TOOL_CONTACT_FORCE` (or half the protective stop
-force when that is lower), so that the tool contact stops the robot before the protective stop would. The stop
+How ur_sim detects the contact: after every control cycle, a contact of a body of the tool or the flange (the
+subtree of ``wrist_3_link``) whose force, averaged over the cycle's physics steps (``physics.py``), is above
+:data:`TOOL_CONTACT_FORCE` (or half the protective stop force when that is lower). The protective stop acts on a
+mean over a longer window (``safety.py``), so that a slow approach ends in a tool contact, never in a protective
+stop (``test_tool_contact.py``: 20 approaches at 5 to 50 mm/s). The stop
 is commanded in the next control cycle: the active joint controller holds the measured position and its goal
 ends (``JointCommander.halt``), and the servo brakes at the robot's limits.
 """
