@@ -74,19 +74,23 @@ def wait_for(condition, timeout: float = TIMEOUT, what: str = 'condition') -> No
 
 
 def wait_answer(future, what: str = 'the answer', timeout: float = TIMEOUT):
-    """Wait for a service's answer and return it. A lockstep simulation steps one control cycle per half millisecond
-    of wall time meanwhile: a request may need a cycle (a controller switch is applied in one), while the answer's
-    way back is DDS's, on the wall clock. The deadline is wall time, a guard against a hang."""
+    """Wait for a service's answer and return it. A lockstep simulation is held still, except for the cycles that a
+    service waits for (a controller switch is applied in a cycle; the dashboard's power on and brake release wait for
+    the robot mode): it takes effect at the same simulated time however long the request and answer travel. The
+    deadline is wall time, a hang guard."""
     if not _lockstep:
         wait_still(future.done, timeout, what)
         return future.result()
     lockstep = _lockstep[-1]
+    manager, host = lockstep.node.controller_manager, lockstep.node.host
     deadline = time.monotonic() + timeout
     while not future.done():
         if time.monotonic() > deadline:
             raise TimeoutError(f'timed out after {timeout:.0f} s waiting for {what}')
-        lockstep.step()
-        time.sleep(0.0005)
+        if manager.pending or host.waiting:
+            lockstep.step()
+        else:
+            time.sleep(0.0005)
     return future.result()
 
 
@@ -270,9 +274,16 @@ class SimHarness:
         return handle
 
     def result(self, handle, timeout: float = TIMEOUT):
-        """Wait for the result of an accepted goal: (status, error_code, error_string)."""
+        """Wait for the result of an accepted goal: (status, error_code, error_string). In lockstep the simulation
+        steps until it has ended the goal and is then held still while the result is delivered, so that the test
+        goes on from the same simulated time however long the delivery takes."""
         future = handle.get_result_async()
-        wait_for(future.done, timeout, 'the goal result')
+        if _lockstep:
+            token = bytes(handle.goal_id.uuid)
+            wait_for(lambda: token in self.sim.gateway.ended, timeout, 'the goal to end')
+            wait_still(future.done, what='the goal result')
+        else:
+            wait_for(future.done, timeout, 'the goal result')
         r = future.result()
         return r.status, r.result.error_code, r.result.error_string
 
@@ -349,7 +360,8 @@ class RobotKeeper:
             wait_for(lambda: robot.robot_mode == RUNNING, what='the robot mode RUNNING')
         if not robot.program_running:
             self._call('resend_robot_program')
-        wait_for(lambda: self.h.sim.robot.motion_refusal() is None, what='the robot ready to move')
+        # The controller_stopper restores the controllers it stopped in the next cycle: wait for it, then compare.
+        wait_for(lambda: self.h.sim._refusal is None, what='the robot ready to move and its controllers back')
         states = self.cm.states()
         now = {name for name, state in states.items() if state == 'active'}
         if now != self.active:

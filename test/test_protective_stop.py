@@ -51,12 +51,12 @@ def test_touching_the_glass_stops_the_robot_and_the_recovery_is_the_real_one(tou
     assert 'contact between dispenser and windshield_piece_' in text and ' N > 50.0 N' in text, text
     robot = h.sim.robot
     assert (robot.safety_mode, robot.program_state) == (PROTECTIVE_STOP, PAUSED)
-    # Halted well before the end of the move (20 mm into the glass) and holding. (In fast mode the result can
-    # arrive while the arm is still braking: about 30 ms at 10 rad/s^2.)
-    h.wait_sim_time(0.2)
+    # Halted well before the end of the move (20 mm into the glass) and holding: after braking, the wrist settles
+    # against the glass (the drift halves every second: 2.1, 0.9, 0.4 mrad in the 1st, 2nd, 3rd second).
+    h.wait_sim_time(2.2)
     q_stop = h.q
     h.wait_sim_time(1.0)
-    assert np.abs(h.q - q_stop).max() < 2e-3
+    assert np.abs(h.q - q_stop).max() < 1e-3
     # The nozzle's collision shape ends 10 mm short of the tip frame (tool.py), and the tool is tilted: the
     # first contact comes about 9 mm past the surface point, and the arm stops within about 1 mm after it.
     surface = kin.fk(seg.q[0])

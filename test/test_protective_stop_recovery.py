@@ -3,7 +3,7 @@ into the table and into the glass; unlocked through the dashboard after the robo
 without stopping again, plays on and moves away; a power cycle clears the stop too."""
 import numpy as np
 from action_msgs.msg import GoalStatus
-from sim_harness import RobotKeeper, point, running_sim
+from sim_harness import RobotKeeper, point, running_sim, wait_for
 
 from ur_glue_planner.execution.ros_conversions import joint_trajectory
 from ur_glue_planner.job import default_job_path, load_job
@@ -45,7 +45,7 @@ def _move_back(h, target) -> None:
 def _unlock_and_play(h, dashboard: RobotKeeper) -> None:
     robot = h.sim.robot
     assert not dashboard.call('unlock_protective_stop').success  # the robot's 5 s have not passed
-    h.wait_sim_time(5.0)
+    wait_for(lambda: robot.unlock_wait() == 0.0, what="the robot's 5 s")
     assert dashboard.call('unlock_protective_stop').success
     h.wait_sim_time(1.0)  # resting where it stopped: no new stop
     assert robot.safety_mode == NORMAL, robot.stop_cause

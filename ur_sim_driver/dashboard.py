@@ -173,22 +173,24 @@ class DashboardClient(Component):
         return True, answer
 
     def _wait(self, condition: Callable[[RobotState], bool], timeout: float) -> bool:
-        """Poll the robot state until `condition` holds or `timeout` [s] of simulated time passed."""
-        sim = self.host.sim
+        """Wait until `condition` holds or `timeout` [s] of simulated time passed, as the simulation loop sees it at
+        the end of a cycle; False also when simulated time stops advancing for STALL_TIMEOUT of wall time."""
+        host = self.host
+        sim = host.sim
         t_end = sim.time + timeout
+        event = host.when(lambda: condition(host.robot) or sim.time >= t_end)
         last_t, last_wall = sim.time, time.monotonic()
-        while True:
-            with self.host.lock:
-                if condition(self.host.robot):
-                    return True
-            t = sim.time
-            if t >= t_end:
-                return False
-            if t != last_t:
-                last_t, last_wall = t, time.monotonic()
-            elif time.monotonic() - last_wall > STALL_TIMEOUT:
-                return False  # the simulation is not running: nothing will change
-            time.sleep(0.001)
+        try:
+            while not event.wait(0.01):
+                t = sim.time
+                if t != last_t:
+                    last_t, last_wall = t, time.monotonic()
+                elif time.monotonic() - last_wall > STALL_TIMEOUT:
+                    return False  # the simulation is not running: nothing will change
+        finally:
+            host.forget(event)
+        with host.lock:
+            return condition(host.robot)
 
     def _query(self, line: str, pattern: str, response) -> re.Match | None:
         """Send a query; fill `answer` and `success` as the driver does; the match when successful."""

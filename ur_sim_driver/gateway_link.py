@@ -25,6 +25,7 @@ start itself again.
 """
 from __future__ import annotations
 
+import collections
 import mmap
 import os
 import queue
@@ -42,6 +43,8 @@ import numpy as np
 from ur_sim_driver.command_arrays import CommandArrays
 from ur_sim_driver.passthrough import PassthroughTolerances
 from ur_sim_driver.trajectory_types import SegmentTolerances
+
+ENDED_KEPT = 1024  # how many ended goals' tokens GatewayLink.ended keeps
 
 
 @dataclass(frozen=True)
@@ -189,6 +192,9 @@ class GatewayLink:
         self._closed = threading.Event()
         self._acks: dict[int, threading.Event] = {}
         self._acks_lock = threading.Lock()
+        # Tokens of the latest goals the simulation ended (Ended, or a granted Canceled), newest last: a script that
+        # steps the simulation itself steps until its goal is among them, then waits for the result's delivery.
+        self.ended: collections.deque = collections.deque(maxlen=ENDED_KEPT)
         self._receiver = threading.Thread(target=self._receive, name='gateway_receive', daemon=True)
         self._sender = threading.Thread(target=self._send, name='gateway_send', daemon=True)
         self._receiver.start()
@@ -200,6 +206,8 @@ class GatewayLink:
 
     def send(self, message: object) -> None:
         """Queue a message for the gateway; never blocks (the simulation loop calls this)."""
+        if isinstance(message, Ended) or (isinstance(message, Canceled) and message.ok):
+            self.ended.append(message.token)
         self._outbox.put(message)
 
     def activation(self, controller: str, active: bool) -> threading.Event:

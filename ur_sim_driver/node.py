@@ -293,6 +293,7 @@ class UrSimNode(Node):
                 self.robot.protective_stop(self.sim.time, cause)
                 self._controller_stopper()
             robot_factor, total_factor = self.scaling.factor, self.scaling.total
+            self.host.check_waiters()
         self.gateway.set_sim_time(self.sim.time)
         cycle = Cycle(self._cycle, state.t, conv.time_parts(state.t), state, sample, tau, robot_factor,
                       total_factor, tcp_position, tcp_orientation, wrench)

@@ -13,7 +13,8 @@ component that changes the simulation (IO, payload, robot state) does so from it
 from __future__ import annotations
 
 import threading
-from dataclasses import dataclass
+from collections.abc import Callable
+from dataclasses import dataclass, field
 from functools import cached_property
 from typing import TYPE_CHECKING
 
@@ -88,6 +89,40 @@ class Host:
     robot: RobotState
     speed_scaling: RobotSpeedScaling
     context: object
+    # Conditions a service callback waits for, each with the event the loop sets once it holds (under `lock`).
+    _waiters: list[tuple[Callable[[], bool], threading.Event]] = field(default_factory=list)
+
+    def when(self, condition: Callable[[], bool]) -> threading.Event:
+        """An event the simulation loop sets at the end of the first cycle after which `condition()` (evaluated under
+        the lock) holds: a service that waits for the robot waits on it, and waits for exactly the cycles it needs."""
+        event = threading.Event()
+        with self.lock:
+            if condition():
+                event.set()
+            else:
+                self._waiters.append((condition, event))
+        return event
+
+    def forget(self, event: threading.Event) -> None:
+        """Stop checking the condition of `event` (its waiter gave up)."""
+        with self.lock:
+            self._waiters[:] = [(c, e) for c, e in self._waiters if e is not event]
+
+    @property
+    def waiting(self) -> bool:
+        """A service callback waits for the robot (a script that steps the simulation itself steps then)."""
+        return bool(self._waiters)
+
+    def check_waiters(self) -> None:
+        """Under the lock, at the end of a cycle: set the events whose conditions hold."""
+        if self._waiters:
+            remaining = []
+            for condition, event in self._waiters:
+                if condition():
+                    event.set()
+                else:
+                    remaining.append((condition, event))
+            self._waiters[:] = remaining
 
     def create_node(self, name: str) -> Node:
         """A node named `name` in ur_sim's namespace, as ros2_control gives each controller one."""

@@ -87,6 +87,11 @@ class ControllerManagerNode:
                                  callback_group=ReentrantCallbackGroup())
         self._switch_lock = threading.Lock()  # one switch at a time, as upstream's services lock
 
+    @property
+    def pending(self) -> bool:
+        """A switch request waits for the next cycle (a script that steps the simulation itself steps then)."""
+        return bool(self._pending)
+
     # ---- simulation loop, under the lock ---------------------------------------------------------------------------
     def apply_pending(self) -> None:
         """Decide and do the switches requested since the last cycle."""
