@@ -14,8 +14,10 @@ PRESET = dict(ur_type='ur10', namespace='/ur10', controller_name='vel_based_pos_
 
 @pytest.fixture(scope='module')
 def sim_and_client():
-    # Free-running: the client library under test waits on its own (wall-clock) deadlines.
-    with running_sim(lockstep=False, **PRESET) as h:
+    # In real time, as against a robot: the client library under test waits on its own (wall-clock) deadlines and
+    # samples the joint states it has received; as fast as possible, a loaded machine's DDS delay was tenths of a
+    # simulated second, and a 0.5 s recording caught a third of a 1 s motion.
+    with running_sim(real_time_factor=1.0, **PRESET) as h:
         client = URClient(namespace='/ur10', controller_name='vel_based_pos_traj_controller',
                           context=h.client.context, node_name='test_ur_client')
         try:
