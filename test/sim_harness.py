@@ -21,10 +21,15 @@ from rclpy.qos import DurabilityPolicy, QoSProfile
 from ros_helpers import ros_context
 from sensor_msgs.msg import JointState
 from std_msgs.msg import Float64
+from std_srvs.srv import Trigger
 from trajectory_msgs.msg import JointTrajectory, JointTrajectoryPoint
+from ur_msgs.msg import Analog
+from ur_msgs.srv import SetAnalogOutput, SetIO, SetPayload, SetSpeedSliderFraction
 
 from ur_glue_planner.execution.action_client import ActionClient
+from ur_sim_driver.io_bank import SPAN
 from ur_sim_driver.node import UrSimNode
+from ur_sim_driver.robot_state import PROTECTIVE_STOP, RUNNING
 from ur_sim_driver.spin_thread import SpinThread
 
 TIMEOUT = 30.0  # [s] deadline of a wait: simulated time where the simulation steps, else wall time (a hang guard)
@@ -304,8 +309,6 @@ class RobotKeeper:
 
     def __init__(self, h: SimHarness) -> None:
         from cm_helpers import ControllerManagerClient
-        from std_srvs.srv import Trigger
-
         self.h = h
         p = h.sim.cfg.prefixed
         group = ReentrantCallbackGroup()
@@ -315,8 +318,6 @@ class RobotKeeper:
         self._trigger = {n.split('/')[-1]: h.client.create_client(Trigger, p(n), callback_group=group) for n in names}
         for client in self._trigger.values():
             wait_still(client.service_is_ready, what=f'the service {client.srv_name}')
-        from ur_msgs.srv import SetAnalogOutput, SetIO, SetPayload, SetSpeedSliderFraction
-
         self._set_io = h.client.create_client(SetIO, p('io_and_status_controller/set_io'), callback_group=group)
         self._set_analog = h.client.create_client(SetAnalogOutput, p('io_and_status_controller/set_analog_output'),
                                                   callback_group=group)
@@ -338,8 +339,6 @@ class RobotKeeper:
     def call(self, name: str):
         """Call the Trigger service `name` (unlock_protective_stop, power_on, power_off, brake_release, play,
         resend_robot_program); its response."""
-        from std_srvs.srv import Trigger
-
         return wait_answer(self._trigger[name].call_async(Trigger.Request()), f'the answer of {name}')
 
     def _call(self, name: str) -> str:
@@ -348,8 +347,6 @@ class RobotKeeper:
         return answer.message
 
     def recover(self) -> None:
-        from ur_sim_driver.robot_state import PROTECTIVE_STOP, RUNNING
-
         robot = self.h.sim.robot
         if robot.safety_mode == PROTECTIVE_STOP:
             wait_for(lambda: robot.unlock_wait() == 0.0, what='the 5 s before a protective stop may be unlocked')
@@ -370,8 +367,6 @@ class RobotKeeper:
         self._restore_io()
         self._restore_payload()
         if self.h.sim.scaling.slider != self.slider:
-            from ur_msgs.srv import SetSpeedSliderFraction
-
             self._answer(self._set_slider, SetSpeedSliderFraction.Request(speed_slider_fraction=self.slider))
 
     def _answer(self, client, request) -> None:
@@ -379,11 +374,6 @@ class RobotKeeper:
         assert answer.success, f'{client.srv_name} refused {request}'
 
     def _restore_io(self) -> None:
-        from ur_msgs.msg import Analog
-        from ur_msgs.srv import SetAnalogOutput, SetIO
-
-        from ur_sim_driver.io_bank import SPAN
-
         io, was = self.h.sim.sim.io, self.io
         for pin, (now, then) in enumerate(zip(io.digital_out, was.digital_out)):
             if now != then:
@@ -399,8 +389,6 @@ class RobotKeeper:
                                                      state=float(was.tool_voltage)))
 
     def _restore_payload(self) -> None:
-        from ur_msgs.srv import SetPayload
-
         now, then = self.h.sim.sim.payload, self.payload
         if now is then:
             return
