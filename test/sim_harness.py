@@ -109,6 +109,28 @@ def wait_still(condition, timeout: float = TIMEOUT, what: str = 'condition') -> 
         time.sleep(0.002)
 
 
+def ready_action(action: ActionClient, probe_goals: bool = True) -> None:
+    """Wait until `action`'s server answers this client on all three of its services, holding a lockstep
+    simulation still.
+
+    server_is_ready() says the client sees the server; the server may not yet see the client's response readers,
+    and a response sent before that is lost (DDS discovery). With `probe_goals`, goals without points (rejected,
+    no side effect: only for FollowJointTrajectory) are sent until one is answered; result and cancel requests
+    about a goal the server never had prove the other two.
+    """
+    wait_still(action.server_is_ready, what=f'the action server {action._action_name}')
+    deadline = time.monotonic() + TIMEOUT
+    futures = []
+    while probe_goals and not any(f.done() for f in futures):
+        if time.monotonic() > deadline:
+            raise TimeoutError(f'{action._action_name} answered none of {len(futures)} goals')
+        futures.append(action.send_goal_async(FollowJointTrajectory.Goal()))
+        resend = time.monotonic() + 2.0
+        while not any(f.done() for f in futures) and time.monotonic() < resend:
+            time.sleep(0.002)
+    action.wait_until_answering(timeout=TIMEOUT)
+
+
 def duration(t: float) -> Duration:
     ns = round(t * 1e9)
     return Duration(sec=ns // 1_000_000_000, nanosec=ns % 1_000_000_000)
@@ -164,26 +186,8 @@ class SimHarness:
         self._scaling_topic = p('speed_scaling_state_broadcaster/speed_scaling')
         self._recorder: Node | None = None
         self._listeners: list = []
-        wait_still(lambda: self.action.server_is_ready(), what='the FollowJointTrajectory server')
-        self._warm_up_action()
+        ready_action(self.action)
         wait_still(lambda: self.topic.get_subscription_count() > 0, what='the joint_trajectory subscriber')
-
-    def _warm_up_action(self) -> None:
-        """Send goals without points (rejected, no side effect) until one is answered.
-
-        server_is_ready() says the client sees the server; the server may not yet see the client's response
-        reader, and a response sent before that is lost (DDS discovery). One answered request proves the path.
-        """
-        deadline = time.monotonic() + TIMEOUT
-        while True:
-            future = self.action.send_goal_async(FollowJointTrajectory.Goal())
-            answered = time.monotonic() + 2.0
-            while not future.done() and time.monotonic() < answered:
-                time.sleep(0.005)
-            if future.done():
-                return
-            if time.monotonic() > deadline:
-                raise TimeoutError('the FollowJointTrajectory server never answered a goal')
 
     def _on_js(self, msg: JointState) -> None:
         rec = self.recording

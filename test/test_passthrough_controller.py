@@ -10,7 +10,7 @@ from action_msgs.msg import GoalStatus
 from cm_helpers import BEST_EFFORT, ControllerManagerClient
 from control_msgs.action import FollowJointTrajectory
 from rclpy.callback_groups import ReentrantCallbackGroup
-from sim_harness import point, running_sim, wait_for, wait_still
+from sim_harness import point, ready_action, running_sim, wait_for
 
 from ur_glue_planner.execution.action_client import ActionClient
 from ur_sim_driver import result_codes as rc
@@ -27,7 +27,7 @@ def rig():
         cm = ControllerManagerClient(h)
         client = ActionClient(h.client, FollowJointTrajectory, f'/{NAME}/follow_joint_trajectory',
                               callback_group=ReentrantCallbackGroup())
-        wait_still(client.server_is_ready, what='the passthrough action server')
+        ready_action(client)
         # The driver's tests launch with start_joint_controller false: no joint controller is active.
         assert cm.switch(deactivate=['scaled_joint_trajectory_controller']).ok
         h.keeper.remember()

@@ -9,11 +9,11 @@ import pytest
 from action_msgs.msg import GoalStatus
 from cm_helpers import BEST_EFFORT, ControllerManagerClient
 from control_msgs.action import FollowJointTrajectory
-from rclpy.action import ActionClient
 from rclpy.callback_groups import ReentrantCallbackGroup
-from sim_harness import running_sim, wait_for, wait_still
+from sim_harness import ready_action, running_sim, wait_for, wait_still
 from ur_msgs.action import ToolContact
 
+from ur_glue_planner.execution.action_client import ActionClient
 from ur_glue_planner.execution.ros_conversions import joint_trajectory
 from ur_glue_planner.job import default_job_path, load_job
 from ur_glue_planner.motion.approach import joint_move
@@ -40,7 +40,7 @@ class ToolContactClient:
     def __init__(self, h) -> None:
         self.client = ActionClient(h.client, ToolContact, f'/{NAME}/detect_tool_contact',
                                    callback_group=ReentrantCallbackGroup())
-        wait_still(self.client.server_is_ready, what='the ToolContact server')
+        ready_action(self.client, probe_goals=False)  # an empty ToolContact goal is a real request
 
     def send(self):
         future = self.client.send_goal_async(ToolContact.Goal())
@@ -161,7 +161,7 @@ def test_a_passthrough_trajectory_is_aborted_by_the_robot(scene):
     assert cm.switch(activate=[passthrough, NAME], deactivate=['scaled_joint_trajectory_controller']).ok
     client = ActionClient(h.client, FollowJointTrajectory, f'/{passthrough}/follow_joint_trajectory',
                           callback_group=ReentrantCallbackGroup())
-    wait_still(client.server_is_ready, what='the passthrough server')
+    ready_action(client)
     contact_goal = tc.send()
     assert contact_goal.accepted
     future = client.send_goal_async(goal_of(h, seg))

@@ -10,7 +10,7 @@ from control_msgs.action import FollowJointTrajectory
 from control_msgs.msg import JointTrajectoryControllerState
 from control_msgs.srv import QueryTrajectoryState
 from rclpy.callback_groups import ReentrantCallbackGroup
-from sim_harness import point, running_sim, wait_answer, wait_for, wait_still
+from sim_harness import point, ready_action, running_sim, wait_answer, wait_for, wait_still
 
 from ur_glue_planner.execution.action_client import ActionClient
 from ur_sim_driver import conversions as conv
@@ -29,7 +29,7 @@ def robot():
                                                          f'/{JTC}/follow_joint_trajectory', callback_group=group)}
         h.query = {name: h.client.create_client(QueryTrajectoryState, f'/{name}/query_state', callback_group=group)
                    for name in (SCALED, JTC)}
-        wait_still(h.actions[JTC].server_is_ready, what='the unscaled action server')
+        ready_action(h.actions[JTC])
         for client in h.query.values():
             wait_still(client.service_is_ready, what='query_state')
         yield h

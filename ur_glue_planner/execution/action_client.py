@@ -7,12 +7,23 @@ logs "Ignoring unexpected ... response" and the future never completes (a goal t
 result never delivered). Upstream fixed it later (rclpy PRs #1308, #1517, #1519) with a lock; no wheel on PyPI
 has the fix yet. This subclass does the same: sending and registering happen under a lock, and the executor
 takes responses under it too, so a response is always taken after its future exists.
+
+A second loss is DDS's: a server drops a response it sends before its response writer has matched the client's
+response reader (rmw_fastrtps waits 100 ms for the match, then logs "client will not receive response").
+``server_is_ready`` proves only the other direction. ``wait_until_answering`` closes that gap for the result and
+cancel services, with requests about a goal the server never had: they change nothing on the server.
 """
 from __future__ import annotations
 
 import threading
+import time
+import uuid
 
 from rclpy.action import ActionClient as _RclpyActionClient
+from rclpy.action.client import ClientGoalHandle
+from unique_identifier_msgs.msg import UUID
+
+POLL = 0.002  # [s] between looks at the pending answers
 
 
 class ActionClient(_RclpyActionClient):
@@ -37,3 +48,30 @@ class ActionClient(_RclpyActionClient):
     def take_data(self):
         with self._request_lock:
             return super().take_data()
+
+    def wait_until_answering(self, timeout: float = 10.0, resend: float = 1.0) -> None:
+        """Block until the server has answered a result request and a cancel request of this client.
+
+        Call after ``server_is_ready``, with the client's executor spinning in another thread. Both requests name a
+        random goal id the server never had (answers: status UNKNOWN, cancel ERROR_UNKNOWN_GOAL_ID) and are sent
+        again every `resend` [s] of wall time until each is answered once.
+
+        Raises:
+            TimeoutError: no answer to one of them within `timeout` [s] of wall time, naming the action.
+        """
+        ghost = ClientGoalHandle(self, UUID(uuid=list(uuid.uuid4().bytes)), None)
+        probes = {'result': self._get_result_async, 'cancel': self._cancel_goal_async}
+        deadline = time.monotonic() + timeout
+        for what, send in probes.items():
+            futures = []
+            while not any(f.done() for f in futures):
+                if time.monotonic() > deadline:
+                    raise TimeoutError(f'{self._action_name}: the server answered none of {len(futures)} {what} '
+                                       f'requests within {timeout:.1f} s')
+                futures.append(send(ghost))
+                again = min(time.monotonic() + resend, deadline)
+                while time.monotonic() < again and not any(f.done() for f in futures):
+                    time.sleep(POLL)
+            for f in futures:
+                if not f.done():
+                    f.cancel()

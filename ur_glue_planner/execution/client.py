@@ -204,6 +204,10 @@ class URClient:
         self._spinner = SpinThread(self._executor, 'ur_client', pace=self._pace).start()
         try:
             _wait(self._action.server_is_ready, timeout, f'FollowJointTrajectory server {self.action_name} not found')
+            try:
+                self._action.wait_until_answering(timeout)
+            except TimeoutError as e:
+                raise ClientError(str(e)) from None
             _wait(lambda: self._latest is not None, timeout, f'no joint states on {prefix}/joint_states')
             _wait(lambda: self._topic.get_subscription_count() > 0, timeout,
                   f'no subscriber on {prefix}/{controller_name}/joint_trajectory')
