@@ -32,6 +32,7 @@ from ur_sim_driver.node import UrSimNode
 from ur_sim_driver.robot_state import PROTECTIVE_STOP, RUNNING
 from ur_sim_driver.spin_thread import SpinThread
 
+POSE_TOLERANCE = 1e-3  # [rad] a joint further than this from the remembered pose is moved back after a test
 TIMEOUT = 30.0  # [s] deadline of a wait: simulated time where the simulation steps, else wall time (a hang guard)
 
 
@@ -307,7 +308,8 @@ class RobotKeeper:
     dashboard once the robot allows it (5 s after the stop), power and brakes through the dashboard, the External
     Control program through resend_robot_program, the controllers that were active when this keeper was made, and
     through io_and_status_controller the outputs (digital, analog, tool voltage), the payload and the speed slider as
-    they were then. The pose is each test's to set up (a move back could itself collide).
+    they were then, and last the pose: a trajectory back on the scaled trajectory controller (activated for the move
+    if another controller holds the joints, then the controllers are switched back).
     ``running_sim`` makes one for every simulation, and ``conftest.py`` recovers every running simulation after
     each test, so that a module's tests start from a working robot whatever the one before did."""
 
@@ -337,8 +339,10 @@ class RobotKeeper:
         self.io, self.payload, self.slider = sim.sim.io, sim.sim.payload, sim.scaling.slider
 
     def remember(self) -> None:
-        """The controllers active now are the ones to restore (for a fixture that switched them in its set-up)."""
+        """The controllers active now and the pose now are the ones to restore (for a fixture that switched
+        controllers or moved the robot in its set-up)."""
         self.active = {name for name, state in self.cm.states().items() if state == 'active'}
+        self.pose = self.h.q.copy()
 
     def call(self, name: str):
         """Call the Trigger service `name` (unlock_protective_stop, power_on, power_off, brake_release, play,
@@ -372,6 +376,30 @@ class RobotKeeper:
         self._restore_payload()
         if self.h.sim.scaling.slider != self.slider:
             self._answer(self._set_slider, SetSpeedSliderFraction.Request(speed_slider_fraction=self.slider))
+        self._restore_pose()
+
+    def _restore_pose(self) -> None:
+        """Move back to the remembered pose at a leisurely 0.5 rad/s of the joint that moves most (2 s at least)."""
+        h = self.h
+        distance = float(np.max(np.abs(h.q - self.pose)))
+        if distance < POSE_TOLERANCE:
+            return
+        mover = h.sim.cfg.controller_name
+        controllers = self.cm.controllers()
+        joints = set(controllers[mover].required_command_interfaces)
+        holding = sorted(name for name, c in controllers.items()
+                         if c.state == 'active' and name != mover and joints & set(c.required_command_interfaces))
+        if holding or controllers[mover].state != 'active':
+            answer = self.cm.switch(activate=[mover], deactivate=holding)
+            assert answer.ok, answer
+        handle = h.send(h.goal([point(self.pose, max(2.0, distance / 0.5))]))
+        assert handle.accepted, 'the trajectory back to the remembered pose was rejected'
+        status, code, text = h.result(handle)
+        assert code == 0, f'the trajectory back to the remembered pose failed ({status}, {code}: {text})'
+        wait_for(lambda: float(np.max(np.abs(h.q - self.pose))) < POSE_TOLERANCE, 5.0, 'the arm settled back')
+        if holding or mover not in self.active:
+            answer = self.cm.switch(activate=holding, deactivate=[] if mover in self.active else [mover])
+            assert answer.ok, answer
 
     def _answer(self, client, request) -> None:
         answer = wait_answer(client.call_async(request), f'the answer of {client.srv_name}')
