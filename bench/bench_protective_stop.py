@@ -20,9 +20,9 @@ from ur_glue_planner.motion.kinematics import ur_kinematics
 from ur_glue_planner.motion.plan import plan_job
 from ur_glue_planner.motion.touch import touch_move
 from ur_glue_planner.scene.waypoints import tool_axis
-from ur_sim_driver.node import UrSimNode
-from ur_sim_driver.robot_state import PROTECTIVE_STOP
-from ur_sim_driver.trajectory_types import TrajectoryPoints
+from ur_sim_driver.motion.trajectory_types import TrajectoryPoints
+from ur_sim_driver.robot.robot_state import PROTECTIVE_STOP
+from ur_sim_driver.ros.node import UrSimNode
 
 SPEED = 0.15  # [m/s] tip speed at the glass
 

@@ -29,13 +29,13 @@ from sensor_msgs.msg import JointState
 from trajectory_msgs.msg import JointTrajectoryPoint
 
 from ur_glue_planner.execution.action_client import ActionClient
-from ur_sim_driver.jtc import TrajectoryController
-from ur_sim_driver.sim_config import sim_config_from_params
-from ur_sim_driver.simulator import Simulator
-from ur_sim_driver.spin_thread import SpinThread
-from ur_sim_driver.tolerances import default_tolerances
-from ur_sim_driver.trajectory_types import TrajectoryCommand
-from ur_sim_driver.validation import map_to_config_order
+from ur_sim_driver.motion.jtc import TrajectoryController
+from ur_sim_driver.motion.tolerances import default_tolerances
+from ur_sim_driver.motion.trajectory_types import TrajectoryCommand
+from ur_sim_driver.motion.validation import map_to_config_order
+from ur_sim_driver.robot.sim_config import sim_config_from_params
+from ur_sim_driver.robot.simulator import Simulator
+from ur_sim_driver.ros.spin_thread import SpinThread
 
 RATE_WINDOW = float(os.environ.get('UR_SIM_BENCH_RATE_SECONDS', '5'))  # [s] of real-time /joint_states
 JOINTS = ['shoulder_pan_joint', 'shoulder_lift_joint', 'elbow_joint', 'wrist_1_joint', 'wrist_2_joint',
@@ -254,7 +254,7 @@ def cycle_profile(cycles: int = 5000) -> dict:
     """Where one control cycle's time goes, in-process (ur5e, 500 Hz, holding), without an executor: the mean
     wall time [us] of each active component's update (its topics: building and publishing) and of the rest of
     the cycle (the locked part: robot state, controller, servo, computed torque, physics step, safety)."""
-    from ur_sim_driver.node import UrSimNode  # here: the benchmark's other parts need no in-process node
+    from ur_sim_driver.ros.node import UrSimNode  # here: the benchmark's other parts need no in-process node
 
     ctx = Context()
     rclpy.init(context=ctx, domain_id=int(os.environ.get('UR_SIM_BENCH_PROFILE_DOMAIN', '179')))

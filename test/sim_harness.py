@@ -27,10 +27,10 @@ from ur_msgs.msg import Analog
 from ur_msgs.srv import SetAnalogOutput, SetIO, SetPayload, SetSpeedSliderFraction
 
 from ur_glue_planner.execution.action_client import ActionClient
-from ur_sim_driver.io_bank import SPAN
-from ur_sim_driver.node import UrSimNode
-from ur_sim_driver.robot_state import PROTECTIVE_STOP, RUNNING
-from ur_sim_driver.spin_thread import SpinThread
+from ur_sim_driver.robot.io_bank import SPAN
+from ur_sim_driver.robot.robot_state import PROTECTIVE_STOP, RUNNING
+from ur_sim_driver.ros.node import UrSimNode
+from ur_sim_driver.ros.spin_thread import SpinThread
 
 POSE_TOLERANCE = 1e-3  # [rad] a joint further than this from the remembered pose is moved back after a test
 TIMEOUT = 30.0  # [s] deadline of a wait: simulated time where the simulation steps, else wall time (a hang guard)

@@ -4,9 +4,9 @@ import pytest
 from rclpy.serialization import serialize_message
 from trajectory_msgs.msg import JointTrajectory, JointTrajectoryPoint
 
-from ur_sim_driver.cdr import parse_joint_trajectory
-from ur_sim_driver.command_arrays import from_points
 from ur_sim_driver.errors import TrajectoryError
+from ur_sim_driver.gateway.cdr import parse_joint_trajectory
+from ur_sim_driver.motion.command_arrays import from_points
 
 
 def message(points, names=('a', 'bb', 'ccc'), stamp=(3, 250_000_000), frame='base'):

@@ -14,7 +14,7 @@ from sensor_msgs.msg import JointState
 from std_msgs.msg import Float64
 from tf2_msgs.msg import TFMessage
 
-from ur_sim_driver.cdr_template import CdrTemplate
+from ur_sim_driver.controllers.cdr_template import CdrTemplate
 from ur_sim_driver.errors import UrSimError
 
 NAMES = ['my_ur_shoulder_pan_joint', 'my_ur_shoulder_lift_joint', 'my_ur_elbow_joint', 'my_ur_wrist_1_joint',

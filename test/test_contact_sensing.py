@@ -18,8 +18,8 @@ from ur_glue_planner.motion.kinematics import ur_kinematics
 from ur_glue_planner.motion.plan import plan_job
 from ur_glue_planner.motion.touch import touch_move
 from ur_glue_planner.scene.waypoints import tool_axis
-from ur_sim_driver.sim_config import SimConfig
-from ur_sim_driver.simulator import Simulator
+from ur_sim_driver.robot.sim_config import SimConfig
+from ur_sim_driver.robot.simulator import Simulator
 
 # [N m] on top of gravity compensation: shoulder and elbow press the nozzle on into the glass
 PUSH = np.array([0.0, -2.0, -2.0, 0.0, 0.0, 0.0])

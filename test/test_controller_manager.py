@@ -3,8 +3,8 @@ from __future__ import annotations
 
 import pytest
 
-from ur_sim_driver import ur_hardware as hw
-from ur_sim_driver.controller_manager import (
+from ur_sim_driver.controllers import ur_hardware as hw
+from ur_sim_driver.controllers.controller_manager import (
     ABORT_STRICT,
     BEST_EFFORT,
     EMPTY_SWITCH,

@@ -2,7 +2,7 @@
 import numpy as np
 import pytest
 
-from ur_sim_driver.controller_state import ARRAYS, FIELDS, pack_state
+from ur_sim_driver.controllers.controller_state import ARRAYS, FIELDS, pack_state
 
 
 def _numpy(q_ref, qd_ref, qdd_ref, q, qd, effort, factor):

@@ -9,7 +9,7 @@ from action_msgs.msg import GoalStatus
 from cm_helpers import BEST_EFFORT, STRICT, ControllerManagerClient
 from sim_harness import point, running_sim, trajectory, wait_for
 
-from ur_sim_driver import result_codes as rc
+from ur_sim_driver.motion import result_codes as rc
 
 SCALED, JTC = 'scaled_joint_trajectory_controller', 'joint_trajectory_controller'
 FPC, FVC = 'forward_position_controller', 'forward_velocity_controller'

@@ -25,9 +25,9 @@ from ur_dashboard_msgs.srv import (
     RawRequest,
 )
 
-from ur_sim_driver import result_codes as rc
-from ur_sim_driver.dashboard import NOT_CONNECTED
-from ur_sim_driver.robot_state import UNLOCK_DELAY
+from ur_sim_driver.motion import result_codes as rc
+from ur_sim_driver.robot.robot_state import UNLOCK_DELAY
+from ur_sim_driver.ros.dashboard import NOT_CONNECTED
 
 ZERO = np.zeros(6)
 TRIGGERS = ('power_on', 'power_off', 'brake_release', 'play', 'pause', 'stop', 'unlock_protective_stop',

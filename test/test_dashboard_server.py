@@ -1,6 +1,6 @@
 """DashboardServer: the robot's dashboard answers (wording of UR's dashboard server) and their effect."""
-from ur_sim_driver.dashboard_server import UNLOCK_REFUSED, DashboardServer
-from ur_sim_driver.robot_state import (
+from ur_sim_driver.robot.dashboard_server import UNLOCK_REFUSED, DashboardServer
+from ur_sim_driver.robot.robot_state import (
     BRAKE_RELEASE_TIME,
     POWER_ON_TIME,
     UNLOCK_DELAY,

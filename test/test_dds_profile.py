@@ -11,7 +11,7 @@ from rclpy.qos import QoSProfile, ReliabilityPolicy
 from ros_helpers import ros_context
 from std_msgs.msg import UInt8MultiArray
 
-from ur_sim_driver.dds_profile import applies, free_received_samples, profile_text
+from ur_sim_driver.gateway.dds_profile import applies, free_received_samples, profile_text
 
 SIZE = 16_000_000  # [bytes] one sample, as large as a 100,000-point goal and more
 
@@ -54,8 +54,8 @@ import rclpy
 from rclpy.node import Node
 from rclpy.qos import QoSProfile, ReliabilityPolicy
 from std_msgs.msg import UInt8MultiArray
-from ur_sim_driver.dds_profile import free_received_samples
-from ur_sim_driver.memory import trim_heap, use_mmap_for_large_blocks
+from ur_sim_driver.gateway.dds_profile import free_received_samples
+from ur_sim_driver.gateway.memory import trim_heap, use_mmap_for_large_blocks
 
 def rss():
     for line in open('/proc/self/status'):

@@ -6,7 +6,8 @@ import math
 import numpy as np
 import pytest
 
-from ur_sim_driver.dispenser import (
+from ur_sim_driver.errors import ConfigError
+from ur_sim_driver.robot.dispenser import (
     ASPECT,
     POINT_SPACING,
     BeadTrack,
@@ -15,7 +16,6 @@ from ur_sim_driver.dispenser import (
     flow_step,
     section,
 )
-from ur_sim_driver.errors import ConfigError
 
 DT = 0.002  # [s] e-series control period
 STEADY = DispenserParams(on_delay=0.0, off_delay=0.0, time_constant=0.0)  # flow = rate while on

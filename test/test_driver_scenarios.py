@@ -12,9 +12,9 @@ import pytest
 from action_msgs.msg import GoalStatus
 from sim_harness import point, running_sim, trajectory, wait_for
 
-from ur_sim_driver import result_codes as rc
 from ur_sim_driver.description.params import load_ur_params
-from ur_sim_driver.robot_state import PROTECTIVE_STOP
+from ur_sim_driver.motion import result_codes as rc
+from ur_sim_driver.robot.robot_state import PROTECTIVE_STOP
 
 # As the driver's test_common.ROBOT_JOINTS: not the controller's order.
 ROBOT_JOINTS = ['elbow_joint', 'shoulder_lift_joint', 'shoulder_pan_joint', 'wrist_1_joint', 'wrist_2_joint',

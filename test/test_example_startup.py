@@ -5,7 +5,7 @@ from pathlib import Path
 from rclpy.node import Node
 from sim_harness import running_sim
 
-from ur_sim_driver.robot_state import RUNNING
+from ur_sim_driver.robot.robot_state import RUNNING
 
 sys.path.insert(0, str(Path(__file__).resolve().parents[1] / 'examples'))
 import startup_like_a_real_robot as example  # noqa: E402

@@ -12,7 +12,7 @@ from geometry_msgs.msg import WrenchStamped
 from sim_harness import running_sim, wait_for, wait_still
 from std_msgs.msg import Bool
 
-from ur_sim_driver import conversions as conv
+from ur_sim_driver.motion import conversions as conv
 
 NAME = 'freedrive_mode_controller'
 SCALED = 'scaled_joint_trajectory_controller'

@@ -9,7 +9,7 @@ import pytest
 from sim_harness import running_sim, yaml_params
 
 from ur_glue_planner.execution.node import run_job
-from ur_sim_driver.scene import config_dir
+from ur_sim_driver.description.scene import config_dir
 
 V = 0.15
 # Two whole glue jobs in real time (2 x 23.6 s of motion), their reports and the video are the `demo` fixture, set up

@@ -5,8 +5,8 @@ import numpy as np
 from action_msgs.msg import GoalStatus, GoalStatusArray
 from sim_harness import point, running_sim, wait_for
 
-from ur_sim_driver import result_codes as rc
-from ur_sim_driver.jtc import PREEMPTED_BY_ACTION
+from ur_sim_driver.motion import result_codes as rc
+from ur_sim_driver.motion.jtc import PREEMPTED_BY_ACTION
 
 TERMINAL = {GoalStatus.STATUS_SUCCEEDED, GoalStatus.STATUS_ABORTED, GoalStatus.STATUS_CANCELED}
 GOALS = 1000

@@ -19,9 +19,9 @@ from ur_dashboard_msgs.msg import RobotMode, SafetyMode
 from ur_msgs.msg import Analog, IOStates, ToolDataMsg
 from ur_msgs.srv import GetRobotSoftwareVersion, SetAnalogOutput, SetIO, SetPayload, SetSpeedSliderFraction
 
-from ur_sim_driver import result_codes as rc
 from ur_sim_driver.controllers.io_and_status import payload_refusal
-from ur_sim_driver.robot_state import IDLE, NORMAL, POWER_OFF, POWER_ON, PROTECTIVE_STOP, RUNNING
+from ur_sim_driver.motion import result_codes as rc
+from ur_sim_driver.robot.robot_state import IDLE, NORMAL, POWER_OFF, POWER_ON, PROTECTIVE_STOP, RUNNING
 
 IO = '/io_and_status_controller'
 

@@ -3,7 +3,7 @@ import math
 
 import pytest
 
-from ur_sim_driver.io_bank import (
+from ur_sim_driver.robot.io_bank import (
     CURRENT,
     N_ANALOG,
     N_DIGITAL,

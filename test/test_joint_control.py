@@ -1,9 +1,9 @@
 """The compiled control cycle equals its parts: reachable accelerations, the servo's step and computed torque."""
 import numpy as np
 
-from ur_sim_driver.joint_control import JointControl
-from ur_sim_driver.servo import JointServo, ServoLimits
-from ur_sim_driver.torque_control import PdGains, computed_torque
+from ur_sim_driver.physics.joint_control import JointControl
+from ur_sim_driver.physics.servo import JointServo, ServoLimits
+from ur_sim_driver.physics.torque_control import PdGains, computed_torque
 
 N, RATE, DT = 6, 500.0, 0.002
 RNG = np.random.default_rng(3)

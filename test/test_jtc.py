@@ -2,8 +2,8 @@
 import numpy as np
 import pytest
 
-from ur_sim_driver.jtc import TrajectoryController
-from ur_sim_driver.tolerances import default_tolerances
+from ur_sim_driver.motion.jtc import TrajectoryController
+from ur_sim_driver.motion.tolerances import default_tolerances
 
 NAMES = ('a', 'b')
 LIMITS = np.array([3.0, 2.0]), np.array([5.0, 5.0])

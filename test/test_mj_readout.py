@@ -2,7 +2,7 @@
 import mujoco
 import numpy as np
 
-from ur_sim_driver.mj_readout import mat_to_quat, read_dynamics, read_joints, read_pose
+from ur_sim_driver.physics.mj_readout import mat_to_quat, read_dynamics, read_joints, read_pose
 
 # A free box first (7 qpos, 6 dofs), then a chain of three hinges: joint addresses do not start at 0.
 XML = """<mujoco><worldbody>

@@ -4,7 +4,7 @@ import pytest
 from action_msgs.msg import GoalStatus
 from sim_harness import point, running_sim, wait_for
 
-from ur_sim_driver import result_codes as rc
+from ur_sim_driver.motion import result_codes as rc
 
 HOME = np.array([0.0, -1.57, 0.0, -1.57, 0.0, 0.0])
 TARGET = np.array([0.4, -1.3, 0.4, -1.4, 0.3, 0.2])

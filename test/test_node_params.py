@@ -10,13 +10,13 @@ from ros_helpers import ros_context
 from sim_harness import running_sim, wait_for
 
 from ur_sim_driver.errors import ConfigError
-from ur_sim_driver.node import UrSimNode
+from ur_sim_driver.ros.node import UrSimNode
 
 
 def test_seed_ur10_preset_names_exist():
     import yaml
 
-    from ur_sim_driver.scene import config_dir
+    from ur_sim_driver.description.scene import config_dir
     preset = yaml.safe_load((config_dir() / 'seed_ur10.yaml').read_text())['/**']['ros__parameters']
     with running_sim(**preset) as h:
         assert h.sim.sim.params.name.lower() == 'ur10'
@@ -79,7 +79,7 @@ def test_real_time_loop_runs_under_sched_fifo_where_permitted(rtf, priority):
 
 
 def test_console_script_exits_nonzero_with_message_on_bad_parameter():
-    proc = subprocess.run([sys.executable, '-m', 'ur_sim_driver.node', '--ros-args', '-p', 'ur_type:=ur3'],
+    proc = subprocess.run([sys.executable, '-m', 'ur_sim_driver.ros.node', '--ros-args', '-p', 'ur_type:=ur3'],
                           capture_output=True, text=True, timeout=60)
     assert proc.returncode == 2
     assert "'ur_type' = 'ur3' is invalid" in proc.stderr

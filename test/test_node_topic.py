@@ -4,7 +4,7 @@ from action_msgs.msg import GoalStatus
 from control_msgs.msg import SpeedScalingFactor
 from sim_harness import point, running_sim, trajectory, wait_for
 
-from ur_sim_driver import result_codes as rc
+from ur_sim_driver.motion import result_codes as rc
 
 ZERO = np.zeros(6)
 

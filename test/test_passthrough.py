@@ -2,9 +2,9 @@
 import numpy as np
 import pytest
 
-from ur_sim_driver import result_codes as rc
-from ur_sim_driver.command_arrays import from_points
-from ur_sim_driver.passthrough import (
+from ur_sim_driver.motion import result_codes as rc
+from ur_sim_driver.motion.command_arrays import from_points
+from ur_sim_driver.motion.passthrough import (
     NOT_WITHIN_TOLERANCE,
     PassthroughTolerances,
     check_goal,
@@ -12,9 +12,9 @@ from ur_sim_driver.passthrough import (
     robot_points,
     tolerances_of,
 )
-from ur_sim_driver.trajectory import Trajectory
-from ur_sim_driver.trajectory_types import ToleranceSpec
-from ur_sim_driver.validation import map_to_config_order
+from ur_sim_driver.motion.trajectory import Trajectory
+from ur_sim_driver.motion.trajectory_types import ToleranceSpec
+from ur_sim_driver.motion.validation import map_to_config_order
 
 JOINTS = ('a', 'b', 'c')
 

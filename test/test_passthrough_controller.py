@@ -13,7 +13,7 @@ from rclpy.callback_groups import ReentrantCallbackGroup
 from sim_harness import point, ready_action, running_sim, wait_for
 
 from ur_glue_planner.execution.action_client import ActionClient
-from ur_sim_driver import result_codes as rc
+from ur_sim_driver.motion import result_codes as rc
 
 NAME = 'passthrough_trajectory_controller'
 HOME = np.array([0.0, -1.5708, 0.0, -1.5708, 0.0, 0.0])  # the driver test's HOME, in joint order

@@ -5,10 +5,10 @@ import pinocchio as pin
 import pytest
 
 from ur_sim_driver.errors import ConfigError
-from ur_sim_driver.payload import make_payload
-from ur_sim_driver.sim_config import sim_config_from_params
-from ur_sim_driver.simulator import Simulator
-from ur_sim_driver.trajectory import TrajectorySample
+from ur_sim_driver.motion.trajectory import TrajectorySample
+from ur_sim_driver.robot.payload import make_payload
+from ur_sim_driver.robot.sim_config import sim_config_from_params
+from ur_sim_driver.robot.simulator import Simulator
 
 # A pose with long lever arms for the payload (forearm out, wrist turned) and joint 1 off zero.
 POSE = (0.4, -1.1, 1.2, -0.6, 1.0, 0.3)

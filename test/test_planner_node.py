@@ -7,7 +7,7 @@ import yaml
 from sim_harness import running_sim, yaml_params
 
 from ur_glue_planner.execution.node import run_job
-from ur_sim_driver.scene import config_dir
+from ur_sim_driver.description.scene import config_dir
 
 
 @pytest.fixture(scope='module')

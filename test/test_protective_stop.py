@@ -13,9 +13,9 @@ from ur_glue_planner.motion.kinematics import ur_kinematics
 from ur_glue_planner.motion.plan import plan_job
 from ur_glue_planner.motion.touch import touch_move
 from ur_glue_planner.scene.waypoints import tool_axis
-from ur_sim_driver import result_codes as rc
 from ur_sim_driver.description.params import load_ur_params
-from ur_sim_driver.robot_state import NORMAL, PAUSED, PLAYING, PROTECTIVE_STOP
+from ur_sim_driver.motion import result_codes as rc
+from ur_sim_driver.robot.robot_state import NORMAL, PAUSED, PLAYING, PROTECTIVE_STOP
 
 
 def goal_of(h, seg) -> FollowJointTrajectory.Goal:

@@ -12,8 +12,8 @@ from ur_glue_planner.motion.kinematics import ur_kinematics
 from ur_glue_planner.motion.plan import plan_job
 from ur_glue_planner.motion.touch import touch_move
 from ur_glue_planner.scene.waypoints import tool_axis
-from ur_sim_driver import result_codes as rc
-from ur_sim_driver.robot_state import NORMAL, PROTECTIVE_STOP, RUNNING
+from ur_sim_driver.motion import result_codes as rc
+from ur_sim_driver.robot.robot_state import NORMAL, PROTECTIVE_STOP, RUNNING
 
 START = np.array([0.0, -1.57, 0.0, -1.57, 0.0, 0.0])
 ELBOW_INTO_ARM = START + np.array([0.0, 0.0, 4.0, 0.0, 0.0, 0.0])  # the wrist meets the upper arm long before 4 rad

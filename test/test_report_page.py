@@ -18,7 +18,7 @@ from ur_glue_planner.report.bead_metrics import bead_quality  # noqa: E402
 from ur_glue_planner.report.html_page import write_index  # noqa: E402
 from ur_glue_planner.report.video import render_video  # noqa: E402
 from ur_glue_planner.scene.windshield import DEFAULT_WINDSHIELD  # noqa: E402
-from ur_sim_driver.scene import config_dir, pose_matrix  # noqa: E402
+from ur_sim_driver.description.scene import config_dir, pose_matrix  # noqa: E402
 
 HOME = np.radians([0.0, -90.0, 0.0, -90.0, 0.0, 0.0])
 

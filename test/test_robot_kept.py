@@ -8,8 +8,8 @@ from cm_helpers import ControllerManagerClient
 from sim_harness import point, running_sim, wait_answer, wait_for, wait_still
 from ur_msgs.srv import SetIO, SetPayload, SetSpeedSliderFraction
 
-from ur_sim_driver import result_codes as rc
-from ur_sim_driver.robot_state import NORMAL, PROTECTIVE_STOP, RUNNING
+from ur_sim_driver.motion import result_codes as rc
+from ur_sim_driver.robot.robot_state import NORMAL, PROTECTIVE_STOP, RUNNING
 
 START = np.array([0.0, -1.57, 0.0, -1.57, 0.0, 0.0])
 

@@ -1,7 +1,7 @@
 """RobotState: every transition and refusal, with explicit simulated times."""
 import pytest
 
-from ur_sim_driver.robot_state import (
+from ur_sim_driver.robot.robot_state import (
     BRAKE_RELEASE_TIME,
     EXTERNAL_CONTROL_PROGRAM,
     IDLE,

@@ -16,7 +16,7 @@ from std_msgs.msg import String
 from tf2_msgs.msg import TFMessage
 
 from ur_sim_driver.errors import ConfigError
-from ur_sim_driver.sim_config import sim_config_from_params
+from ur_sim_driver.robot.sim_config import sim_config_from_params
 
 FK_TOL = 1e-9  # base_link -> tool0 from TF against Pinocchio
 # tool0_controller is MuJoCo's tool0 site pose (its own kinematics, rotation matrix -> quaternion) while

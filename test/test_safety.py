@@ -2,9 +2,10 @@
 import numpy as np
 import pytest
 
-from ur_sim_driver.safety import LIMIT_MARGIN, Contact, ContactSafety, any_outside, limit_cause
-from ur_sim_driver.sim_config import sim_config_from_params
-from ur_sim_driver.simulator import Simulator
+from ur_sim_driver.physics.physics import Contact
+from ur_sim_driver.robot.safety import LIMIT_MARGIN, ContactSafety, any_outside, limit_cause
+from ur_sim_driver.robot.sim_config import sim_config_from_params
+from ur_sim_driver.robot.simulator import Simulator
 
 NAMES = tuple(f'j{i}' for i in range(6))
 Q_MIN, Q_MAX = np.full(6, -1.0), np.full(6, 1.0)

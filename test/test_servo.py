@@ -1,7 +1,7 @@
 """The robot's setpoint generator: exact on feasible references, within limits and never ahead otherwise."""
 import numpy as np
 
-from ur_sim_driver.servo import JointServo, ServoLimits, approach_velocity
+from ur_sim_driver.physics.servo import JointServo, ServoLimits, approach_velocity
 
 N = 2
 DT = 0.002

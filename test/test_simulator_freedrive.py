@@ -3,9 +3,9 @@ limits still hold; position control resumes from the measured state."""
 import mujoco
 import numpy as np
 
-from ur_sim_driver.sim_config import sim_config_from_params
-from ur_sim_driver.simulator import Simulator
-from ur_sim_driver.trajectory import TrajectorySample
+from ur_sim_driver.motion.trajectory import TrajectorySample
+from ur_sim_driver.robot.sim_config import sim_config_from_params
+from ur_sim_driver.robot.simulator import Simulator
 
 POSE = (0.3, -1.2, 1.0, -1.4, -1.2, 0.2)
 

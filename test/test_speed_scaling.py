@@ -2,7 +2,7 @@
 import numpy as np
 import pytest
 
-from ur_sim_driver.speed_scaling import (
+from ur_sim_driver.robot.speed_scaling import (
     FALL_TIME,
     LAG_DEAD_ZONE,
     LAG_SPAN,
@@ -106,9 +106,9 @@ def test_slider_spares_the_robots_own_slowdown():
 
 
 def test_trajectory_time_follows_the_slider():
-    from ur_sim_driver.jtc import TrajectoryController
-    from ur_sim_driver.tolerances import default_tolerances
-    from ur_sim_driver.trajectory_types import TrajectoryPoints
+    from ur_sim_driver.motion.jtc import TrajectoryController
+    from ur_sim_driver.motion.tolerances import default_tolerances
+    from ur_sim_driver.motion.trajectory_types import TrajectoryPoints
 
     names = ('a', 'b')
     tol = default_tolerances(names, trajectory=0.2, goal=0.1, stopped_velocity=0.2, goal_time=0.0)

@@ -1,13 +1,13 @@
-"""Tests of ur_sim_driver.tolerances: defaults, per-goal overrides, checks and outcomes."""
+"""Tests of ur_sim_driver.motion.tolerances: defaults, per-goal overrides, checks and outcomes."""
 
 import math
 
 import numpy as np
 import pytest
 
-from ur_sim_driver import result_codes
 from ur_sim_driver.errors import ConfigError
-from ur_sim_driver.tolerances import (
+from ur_sim_driver.motion import result_codes
+from ur_sim_driver.motion.tolerances import (
     check_goal,
     check_path,
     check_state_tolerance,
@@ -16,7 +16,7 @@ from ur_sim_driver.tolerances import (
     resolve_tolerances,
     resolve_value,
 )
-from ur_sim_driver.trajectory_types import JointTolerances, ToleranceSpec
+from ur_sim_driver.motion.trajectory_types import JointTolerances, ToleranceSpec
 
 JOINTS = ("j0", "j1", "j2")
 

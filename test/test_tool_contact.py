@@ -21,9 +21,9 @@ from ur_glue_planner.motion.kinematics import ur_kinematics
 from ur_glue_planner.motion.plan import plan_job
 from ur_glue_planner.motion.touch import touch_move
 from ur_glue_planner.scene.waypoints import tool_axis
-from ur_sim_driver import result_codes as rc
 from ur_sim_driver.controllers.tool_contact import tool_bodies
-from ur_sim_driver.robot_state import NORMAL, PROTECTIVE_STOP
+from ur_sim_driver.motion import result_codes as rc
+from ur_sim_driver.robot.robot_state import NORMAL, PROTECTIVE_STOP
 
 NAME = 'tool_contact_controller'
 # [m/s] a touch-off speed: at 0.15 m/s the first contact step alone already exceeds the protective stop force

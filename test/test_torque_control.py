@@ -1,7 +1,7 @@
 """Computed-torque control: the model-based law, effort clipping and the drives' torque-speed curve."""
 import numpy as np
 
-from ur_sim_driver.torque_control import PdGains, computed_torque, drive_torque_bounds
+from ur_sim_driver.physics.torque_control import PdGains, computed_torque, drive_torque_bounds
 
 RNG = np.random.default_rng(7)
 N = 6

@@ -1,12 +1,12 @@
-"""Tests of ur_sim_driver.trajectory against independently solved polynomials."""
+"""Tests of ur_sim_driver.motion.trajectory against independently solved polynomials."""
 
 import numpy as np
 import pytest
 
 from ur_sim_driver.errors import TrajectoryError
-from ur_sim_driver.trajectory import Trajectory, interpolate
-from ur_sim_driver.trajectory_types import CommandPoint, TrajectoryCommand, TrajectoryPoints
-from ur_sim_driver.validation import map_to_config_order
+from ur_sim_driver.motion.trajectory import Trajectory, interpolate
+from ur_sim_driver.motion.trajectory_types import CommandPoint, TrajectoryCommand, TrajectoryPoints
+from ur_sim_driver.motion.validation import map_to_config_order
 
 JOINTS = ("a", "b", "c")
 RNG = np.random.default_rng(7)

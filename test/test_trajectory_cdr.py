@@ -4,10 +4,10 @@ import pytest
 from rclpy.serialization import serialize_message
 from trajectory_msgs.msg import JointTrajectory, JointTrajectoryPoint
 
-from ur_sim_driver import trajectory_cdr
-from ur_sim_driver.cdr import parse_joint_trajectory
 from ur_sim_driver.errors import TrajectoryError
-from ur_sim_driver.trajectory_cdr import read_joint_trajectory
+from ur_sim_driver.gateway import trajectory_cdr
+from ur_sim_driver.gateway.cdr import parse_joint_trajectory
+from ur_sim_driver.gateway.trajectory_cdr import read_joint_trajectory
 
 
 def message(points, names=('a', 'bb', 'ccc'), frame='base', stamp=(3, 250_000_000)) -> bytes:

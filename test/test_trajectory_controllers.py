@@ -13,8 +13,8 @@ from rclpy.callback_groups import ReentrantCallbackGroup
 from sim_harness import point, ready_action, running_sim, wait_answer, wait_for, wait_still
 
 from ur_glue_planner.execution.action_client import ActionClient
-from ur_sim_driver import conversions as conv
-from ur_sim_driver import result_codes as rc
+from ur_sim_driver.motion import conversions as conv
+from ur_sim_driver.motion import result_codes as rc
 
 SCALED, JTC = 'scaled_joint_trajectory_controller', 'joint_trajectory_controller'
 ZERO = [0.0] * 6

@@ -10,7 +10,7 @@ from rcl_interfaces.msg import Log
 from sim_harness import point, running_sim, trajectory, wait_for
 from trajectory_msgs.msg import JointTrajectory, JointTrajectoryPoint
 
-from ur_sim_driver import result_codes as rc
+from ur_sim_driver.motion import result_codes as rc
 
 N = 100_000
 

@@ -1,4 +1,4 @@
-"""Tests of ur_sim_driver.validation: one rule per test, plus order and mapping."""
+"""Tests of ur_sim_driver.motion.validation: one rule per test, plus order and mapping."""
 
 import math
 
@@ -6,8 +6,8 @@ import numpy as np
 import pytest
 
 from ur_sim_driver.errors import TrajectoryError
-from ur_sim_driver.trajectory_types import CommandPoint, TrajectoryCommand
-from ur_sim_driver.validation import (
+from ur_sim_driver.motion.trajectory_types import CommandPoint, TrajectoryCommand
+from ur_sim_driver.motion.validation import (
     check_point_sizes,
     check_time_from_start,
     map_to_config_order,

@@ -26,9 +26,9 @@ from ur_glue_planner.scene.windshield_pieces import (
 )
 from ur_sim_driver.description.mjcf import add_static_mesh, build_mjcf
 from ur_sim_driver.description.params import load_ur_params
+from ur_sim_driver.description.scene import load_scene
 from ur_sim_driver.description.tool import get_tool
 from ur_sim_driver.errors import ConfigError
-from ur_sim_driver.scene import load_scene
 
 ROOT = Path(__file__).resolve().parents[1]
 MESHES = ROOT / "meshes"
@@ -117,7 +117,7 @@ def test_scene_collides_with_the_pieces_and_shows_the_whole_mesh():
 
 
 def test_scene_collide_key_must_be_boolean(tmp_path, monkeypatch):
-    import ur_sim_driver.scene as scene
+    import ur_sim_driver.description.scene as scene
 
     (tmp_path / "config" / "scenes").mkdir(parents=True)
     (tmp_path / "meshes").mkdir()

@@ -1,1 +1,13 @@
-"""ur_sim_driver: a MuJoCo simulation of a Universal Robots arm behind the UR ROS 2 driver interfaces."""
+"""ur_sim_driver: a MuJoCo simulation of a Universal Robots arm behind the UR ROS 2 driver interfaces.
+
+Layers, each a subpackage; a module imports only from its own layer, the layers below it, and the modules at the
+top (``errors``, ``paths``), which import nothing of ours (``test/test_layers.py`` checks it):
+
+    ros          the ur_sim node, the dashboard services, robot_state_publisher, IO and wrench components
+    controllers  the driver's ros2_control controllers, one module each, and the controller manager
+    gateway      the trajectory controllers' action and topic interfaces, in a process of their own
+    motion       trajectories, their sampling, tolerances and validation, the trajectory controller core
+    robot        the simulated robot: its state, safety, dashboard, IO, payload, speed scaling, glue gun
+    physics      MuJoCo stepping, contacts and sensors, the joint servo and torque control
+    description  URDF and MJCF from UR parameters, the tool and the scene
+"""

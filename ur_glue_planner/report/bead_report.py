@@ -18,7 +18,7 @@ import numpy as np  # noqa: E402
 from ur_glue_planner.motion.plan import GluePlan  # noqa: E402
 from ur_glue_planner.report.bead_metrics import StationProfile, bead_quality, project_onto_polyline  # noqa: E402
 from ur_glue_planner.scene.waypoints import tool_axis, windshield_model  # noqa: E402
-from ur_sim_driver.dispenser import section  # noqa: E402
+from ur_sim_driver.robot.dispenser import section  # noqa: E402
 
 LABELS = {'constant_speed': 'our planner (constant speed, blended corners, flying start)',
           'seed1': "seed 1's method (per-segment time, min-jerk spline, no blending)"}

@@ -188,7 +188,7 @@ def _plot_paths_3d(plan: GluePlan, executed: np.ndarray | None, path: Path) -> N
 
 def scene_meshes(plan: GluePlan) -> list:
     """The job's static meshes for renders: [(name, STL path, world pose (4, 4))]."""
-    from ur_sim_driver.scene import config_dir, pose_matrix
+    from ur_sim_driver.description.scene import config_dir, pose_matrix
     spec = plan.job.windshield
     mesh = Path(spec.mesh) if Path(spec.mesh).is_absolute() else config_dir().parent / spec.mesh
     return [('windshield', mesh, pose_matrix(spec.xyz, spec.rpy))]

@@ -16,8 +16,8 @@ import mujoco
 import numpy as np
 
 from ur_glue_planner.report.render import scene_xml
-from ur_sim_driver.bead import Bead, draw_bead
 from ur_sim_driver.description.params import joint_names
+from ur_sim_driver.robot.bead import Bead, draw_bead
 
 _MAX_BEAD_SEGMENTS = 400  # geoms per frame for the bead (draw_bead thins the bead to the renderer's budget)
 BEAD_RGBA = (0.95, 0.55, 0.1, 1.0)

@@ -22,14 +22,14 @@ import numpy as np
 from builtin_interfaces.msg import Time
 from rclpy.node import Node
 
-from ur_sim_driver.physics import ArmState
-from ur_sim_driver.trajectory import TrajectorySample
+from ur_sim_driver.motion.trajectory import TrajectorySample
+from ur_sim_driver.physics.physics import ArmState
 
 if TYPE_CHECKING:  # imported for annotations only: no import cycle with the node
-    from ur_sim_driver.robot_state import RobotState
-    from ur_sim_driver.sim_config import SimConfig
-    from ur_sim_driver.simulator import Simulator
-    from ur_sim_driver.speed_scaling import RobotSpeedScaling
+    from ur_sim_driver.robot.robot_state import RobotState
+    from ur_sim_driver.robot.sim_config import SimConfig
+    from ur_sim_driver.robot.simulator import Simulator
+    from ur_sim_driver.robot.speed_scaling import RobotSpeedScaling
 
 
 @dataclass(frozen=True, eq=False)

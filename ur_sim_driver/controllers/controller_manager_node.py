@@ -22,10 +22,10 @@ from controller_manager_msgs.msg import ControllerState, HardwareInterface
 from controller_manager_msgs.srv import ListControllers, ListControllerTypes, ListHardwareInterfaces, SwitchController
 from rclpy.callback_groups import MutuallyExclusiveCallbackGroup, ReentrantCallbackGroup
 
-from ur_sim_driver import conversions as conv
-from ur_sim_driver import ur_hardware
-from ur_sim_driver.controller_manager import BEST_EFFORT, ControllerManager, ControllerSpec, SwitchPlan
+from ur_sim_driver.controllers import ur_hardware
 from ur_sim_driver.controllers.base import Component, Host
+from ur_sim_driver.controllers.controller_manager import BEST_EFFORT, ControllerManager, ControllerSpec, SwitchPlan
+from ur_sim_driver.motion import conversions as conv
 
 NAME = 'controller_manager'
 BASE_CLASS = 'controller_interface::ControllerInterface'

@@ -1,7 +1,7 @@
 """Simulation only: the glue dispenser on a digital output and the bead it lays on the scene (``tool: dispenser``).
 
 A real gun is wired to an output and the glass shows the result; the driver has no interface for either. In
-the simulation this component is that gun and glass (model: ``ur_sim_driver/dispenser.py``):
+the simulation this component is that gun and glass (model: ``ur_sim_driver/robot/dispenser.py``):
 
 * every control cycle it reads ``Simulator.io``'s digital output ``dispenser.pin`` (set through the driver's
   ``/io_and_status_controller/set_io``) and advances the flow;
@@ -9,7 +9,7 @@ the simulation this component is that gun and glass (model: ``ur_sim_driver/disp
   with ``mj_ray`` (the dispenser body excluded; a hit on the robot counts as material lost) and adds the
   cycle's volume to the bead where the axis meets the nearest surface within ``MAX_STANDOFF`` of the tip;
 * it publishes the whole bead so far on ``/ur_sim/glue_bead`` (sensor_msgs/PointCloud2, frame
-  ``<tf_prefix>base``, fields x, y, z, width, height float32 [m], t float64 [s]: ``ur_sim_driver/bead.py``),
+  ``<tf_prefix>base``, fields x, y, z, width, height float32 [m], t float64 [s]: ``ur_sim_driver/robot/bead.py``),
   transient local, every ``PUBLISH_PERIOD`` of simulated time (at most every ``MIN_WALL_PERIOD`` of wall
   time, so that a fast simulation does not flood it), on every change of the output and when the flow has
   stopped;
@@ -29,11 +29,11 @@ from rclpy.qos import DurabilityPolicy, QoSProfile, ReliabilityPolicy
 from sensor_msgs.msg import PointCloud2
 from std_srvs.srv import Trigger
 
-from ur_sim_driver.bead import Bead, to_cloud
 from ur_sim_driver.controllers.base import Component, Cycle, Host
-from ur_sim_driver.conversions import sec_to_time
 from ur_sim_driver.description.tool import get_tool
-from ur_sim_driver.dispenser import MAX_STANDOFF, BeadTrack, FlowState, flow_step
+from ur_sim_driver.motion.conversions import sec_to_time
+from ur_sim_driver.robot.bead import Bead, to_cloud
+from ur_sim_driver.robot.dispenser import MAX_STANDOFF, BeadTrack, FlowState, flow_step
 
 PUBLISH_PERIOD = 0.1  # [s] of simulated time between bead messages while it grows
 MIN_WALL_PERIOD = 0.05  # [s] of wall time between periodic bead messages

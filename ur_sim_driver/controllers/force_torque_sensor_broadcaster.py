@@ -4,8 +4,8 @@ from __future__ import annotations
 from geometry_msgs.msg import WrenchStamped
 from rclpy.node import Node
 
-from ur_sim_driver.cdr_template import CdrTemplate
 from ur_sim_driver.controllers.base import Component, Cycle, Host
+from ur_sim_driver.controllers.cdr_template import CdrTemplate
 
 
 class ForceTorqueSensorBroadcaster(Component):

@@ -27,10 +27,10 @@ from std_msgs.msg import Float64MultiArray
 
 from ur_sim_driver.controllers.base import Host
 from ur_sim_driver.controllers.joint_command import JointCommandController
-from ur_sim_driver.physics import ArmState
-from ur_sim_driver.sim_config import SimConfig
-from ur_sim_driver.trajectory import TrajectorySample
-from ur_sim_driver.ur_hardware import POSITION, VELOCITY, joint_interfaces, prefixed_joints
+from ur_sim_driver.controllers.ur_hardware import POSITION, VELOCITY, joint_interfaces, prefixed_joints
+from ur_sim_driver.motion.trajectory import TrajectorySample
+from ur_sim_driver.physics.physics import ArmState
+from ur_sim_driver.robot.sim_config import SimConfig
 
 TYPES = {POSITION: 'position_controllers/JointGroupPositionController',
          VELOCITY: 'velocity_controllers/JointGroupVelocityController'}

@@ -23,11 +23,11 @@ from std_msgs.msg import Bool
 
 from ur_sim_driver.controllers.base import Host
 from ur_sim_driver.controllers.joint_command import JointCommandController
-from ur_sim_driver.physics import ArmState
-from ur_sim_driver.sim_config import SimConfig
-from ur_sim_driver.simulator import BRAKE_CAPABILITY
-from ur_sim_driver.trajectory import TrajectorySample
-from ur_sim_driver.ur_hardware import FREEDRIVE
+from ur_sim_driver.controllers.ur_hardware import FREEDRIVE
+from ur_sim_driver.motion.trajectory import TrajectorySample
+from ur_sim_driver.physics.physics import ArmState
+from ur_sim_driver.robot.sim_config import SimConfig
+from ur_sim_driver.robot.simulator import BRAKE_CAPABILITY
 
 NAME = 'freedrive_mode_controller'
 TYPE = 'ur_controllers/FreedriveModeController'

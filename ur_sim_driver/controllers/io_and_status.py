@@ -3,7 +3,7 @@
 Every control cycle it publishes ``~/io_states`` (ur_msgs/IOStates: 18 digital in and out, 2 analog in and
 out, no flags) and ``~/tool_data`` (ur_msgs/ToolDataMsg); ``~/robot_mode``, ``~/safety_mode`` and
 ``~/robot_program_running`` are transient local and published when they change, so that a late subscriber
-gets the current value. The IO lives in ``Simulator.io`` (an immutable :class:`~ur_sim_driver.io_bank.IoBank`
+gets the current value. The IO lives in ``Simulator.io`` (an immutable :class:`~ur_sim_driver.robot.io_bank.IoBank`
 replaced under the simulation lock), where the simulated world (a dispenser model, ``/ur_sim/set_input``)
 reads and writes it too.
 
@@ -38,17 +38,17 @@ from ur_dashboard_msgs.msg import RobotMode, SafetyMode
 from ur_msgs.msg import Analog, Digital, IOStates, ToolDataMsg
 from ur_msgs.srv import SetAnalogOutput, SetIO, SetPayload, SetSpeedSliderFraction
 
-from ur_sim_driver.cdr_template import raw_publish
 from ur_sim_driver.controllers.base import Component, Cycle, Host
+from ur_sim_driver.controllers.cdr_template import raw_publish
 from ur_sim_driver.errors import ConfigError
-from ur_sim_driver.io_bank import (
+from ur_sim_driver.robot.io_bank import (
     IoBank,
     analog_out_refusal,
     digital_refusal,
     tool_voltage_refusal,
 )
-from ur_sim_driver.robot_state import POWER_OFF, RobotStatus
-from ur_sim_driver.speed_scaling import SLIDER_MAX, SLIDER_MIN
+from ur_sim_driver.robot.robot_state import POWER_OFF, RobotStatus
+from ur_sim_driver.robot.speed_scaling import SLIDER_MAX, SLIDER_MIN
 
 # Rated payload [kg] per robot type (UR's data sheets).
 PAYLOAD_RATING = {'ur5': 5.0, 'ur5e': 5.0, 'ur10': 10.0, 'ur10e': 12.5}

@@ -2,7 +2,7 @@
 
 In ros2_control such a controller writes the joints' command interfaces (``<joint>/position`` or ``/velocity``);
 the UR hardware turns them into the robot's motion. Here the active one hands the robot's servo a reference
-(:class:`~ur_sim_driver.trajectory.TrajectorySample`) and the position it must not pass, from the simulation
+(:class:`~ur_sim_driver.motion.trajectory.TrajectorySample`) and the position it must not pass, from the simulation
 loop under the simulation lock. The controller manager lets at most one be active (they claim the same joints'
 interfaces, or modes the hardware cannot run together); with none active the robot holds where it is
 (:class:`HoldPosition`), as the UR hardware keeps its last position command.
@@ -12,8 +12,8 @@ from __future__ import annotations
 import numpy as np
 
 from ur_sim_driver.controllers.base import Component
-from ur_sim_driver.physics import ArmState
-from ur_sim_driver.trajectory import TrajectorySample
+from ur_sim_driver.motion.trajectory import TrajectorySample
+from ur_sim_driver.physics.physics import ArmState
 
 
 class JointCommander:

@@ -5,10 +5,10 @@ import numpy as np
 from rclpy.node import Node
 from sensor_msgs.msg import JointState
 
-from ur_sim_driver.cdr_template import CdrTemplate
 from ur_sim_driver.controllers.base import Component, Cycle, Host
-from ur_sim_driver.sim_config import SimConfig
-from ur_sim_driver.ur_hardware import joint_interfaces, prefixed_joints
+from ur_sim_driver.controllers.cdr_template import CdrTemplate
+from ur_sim_driver.controllers.ur_hardware import joint_interfaces, prefixed_joints
+from ur_sim_driver.robot.sim_config import SimConfig
 
 
 class JointStateBroadcaster(Component):

@@ -25,23 +25,23 @@ from control_msgs.srv import QueryTrajectoryState
 from rclpy.callback_groups import MutuallyExclusiveCallbackGroup
 from rclpy.node import Node
 
-from ur_sim_driver import conversions as conv
-from ur_sim_driver import result_codes
-from ur_sim_driver.cdr_template import CdrTemplate
-from ur_sim_driver.controller_state import ARRAYS as STATE_ARRAYS
-from ur_sim_driver.controller_state import FIELDS as STATE_FIELDS
-from ur_sim_driver.controller_state import pack_state
 from ur_sim_driver.controllers.base import Cycle, Host
+from ur_sim_driver.controllers.cdr_template import CdrTemplate
+from ur_sim_driver.controllers.controller_state import ARRAYS as STATE_ARRAYS
+from ur_sim_driver.controllers.controller_state import FIELDS as STATE_FIELDS
+from ur_sim_driver.controllers.controller_state import pack_state
 from ur_sim_driver.controllers.joint_command import JointCommandController
+from ur_sim_driver.controllers.ur_hardware import joint_interfaces, prefixed_joints
 from ur_sim_driver.errors import TrajectoryError
-from ur_sim_driver.gateway_link import Cancel, Canceled, Ended, Feedback, GatewayLink, Start
-from ur_sim_driver.jtc import Outcome, TrajectoryController
-from ur_sim_driver.physics import ArmState
-from ur_sim_driver.sim_config import SimConfig
-from ur_sim_driver.trajectory import TrajectorySample
-from ur_sim_driver.trajectory_gateway import INACTIVE_GOAL, INACTIVE_TOPIC
-from ur_sim_driver.ur_hardware import joint_interfaces, prefixed_joints
-from ur_sim_driver.validation import map_to_config_order
+from ur_sim_driver.gateway.gateway_link import Cancel, Canceled, Ended, Feedback, GatewayLink, Start
+from ur_sim_driver.gateway.trajectory_gateway import INACTIVE_GOAL, INACTIVE_TOPIC
+from ur_sim_driver.motion import conversions as conv
+from ur_sim_driver.motion import result_codes
+from ur_sim_driver.motion.jtc import Outcome, TrajectoryController
+from ur_sim_driver.motion.trajectory import TrajectorySample
+from ur_sim_driver.motion.validation import map_to_config_order
+from ur_sim_driver.physics.physics import ArmState
+from ur_sim_driver.robot.sim_config import SimConfig
 
 SCALED_TYPE = 'ur_controllers/ScaledJointTrajectoryController'
 UNSCALED_TYPE = 'joint_trajectory_controller/JointTrajectoryController'

@@ -18,17 +18,17 @@ from __future__ import annotations
 
 import numpy as np
 
-from ur_sim_driver import result_codes
 from ur_sim_driver.controllers.joint_command import JointCommandController
+from ur_sim_driver.controllers.ur_hardware import PASSTHROUGH, joint_interfaces, prefixed_joints
 from ur_sim_driver.errors import TrajectoryError
-from ur_sim_driver.gateway_link import Cancel, Canceled, Ended, GatewayLink, Start
-from ur_sim_driver.jtc import TrajectoryController
-from ur_sim_driver.passthrough import DEACTIVATED, INACTIVE, PassthroughTolerances, judge_end, robot_points
-from ur_sim_driver.physics import ArmState
-from ur_sim_driver.sim_config import SimConfig
-from ur_sim_driver.trajectory import TrajectorySample
-from ur_sim_driver.ur_hardware import PASSTHROUGH, joint_interfaces, prefixed_joints
-from ur_sim_driver.validation import map_to_config_order
+from ur_sim_driver.gateway.gateway_link import Cancel, Canceled, Ended, GatewayLink, Start
+from ur_sim_driver.motion import result_codes
+from ur_sim_driver.motion.jtc import TrajectoryController
+from ur_sim_driver.motion.passthrough import DEACTIVATED, INACTIVE, PassthroughTolerances, judge_end, robot_points
+from ur_sim_driver.motion.trajectory import TrajectorySample
+from ur_sim_driver.motion.validation import map_to_config_order
+from ur_sim_driver.physics.physics import ArmState
+from ur_sim_driver.robot.sim_config import SimConfig
 
 NAME = 'passthrough_trajectory_controller'
 TYPE = 'ur_controllers/PassthroughTrajectoryController'

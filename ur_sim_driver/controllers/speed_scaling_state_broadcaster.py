@@ -4,9 +4,9 @@ from __future__ import annotations
 from rclpy.node import Node
 from std_msgs.msg import Float64
 
-from ur_sim_driver.cdr_template import CdrTemplate
 from ur_sim_driver.controllers.base import Component, Cycle, Host
-from ur_sim_driver.sim_config import SimConfig
+from ur_sim_driver.controllers.cdr_template import CdrTemplate
+from ur_sim_driver.robot.sim_config import SimConfig
 
 
 class SpeedScalingStateBroadcaster(Component):

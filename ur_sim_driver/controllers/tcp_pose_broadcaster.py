@@ -6,9 +6,9 @@ from geometry_msgs.msg import PoseStamped, TransformStamped
 from rclpy.node import Node
 from tf2_msgs.msg import TFMessage
 
-from ur_sim_driver.cdr_template import CdrTemplate
 from ur_sim_driver.controllers.base import Component, Cycle, Host
-from ur_sim_driver.sim_config import SimConfig
+from ur_sim_driver.controllers.cdr_template import CdrTemplate
+from ur_sim_driver.robot.sim_config import SimConfig
 
 
 class TcpPoseBroadcaster(Component):

@@ -26,9 +26,9 @@ from rclpy.node import Node
 from ur_msgs.action import ToolContact
 
 from ur_sim_driver.controllers.base import Component, Host
-from ur_sim_driver.safety import Contact
-from ur_sim_driver.sim_config import SimConfig
-from ur_sim_driver.ur_hardware import TOOL_CONTACT
+from ur_sim_driver.controllers.ur_hardware import TOOL_CONTACT
+from ur_sim_driver.physics.physics import Contact
+from ur_sim_driver.robot.sim_config import SimConfig
 
 TYPE = 'ur_controllers/ToolContactController'
 TOOL_CONTACT_FORCE = 2.0  # [N] contact force at the tool or flange that counts as a tool contact

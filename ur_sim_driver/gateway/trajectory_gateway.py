@@ -1,0 +1,385 @@
+"""The trajectory controllers' ROS interfaces, in a process of their own (see ``gateway_link.py`` for why).
+
+This process holds one node per trajectory controller (scaled_joint_trajectory_controller,
+joint_trajectory_controller), as in ros2_control, where every controller is a node named after it: each serves
+``~/follow_joint_trajectory`` and subscribes to ``~/joint_trajectory``, validates what arrives, and hands each
+accepted trajectory to the simulation process, which executes it and reports back. A controller that the
+controller manager has deactivated refuses goals and messages with upstream's words.
+
+Order: goal requests, their acceptance and topic messages are handled one at a time in one mutually
+exclusive callback group, and each accepted trajectory is handed over at acceptance, in that order. So the
+newest accepted goal is the one that runs, and the ones it replaces end as upstream's do: aborted,
+INVALID_GOAL "Current goal preempted by new incoming action.".
+"""
+from __future__ import annotations
+
+import faulthandler
+import mmap
+import signal
+import struct
+import sys
+import threading
+import time
+from multiprocessing.connection import Connection
+
+import rclpy
+from control_msgs.action import FollowJointTrajectory
+from rclpy.action import CancelResponse, GoalResponse
+from rclpy.callback_groups import MutuallyExclusiveCallbackGroup
+from rclpy.executors import ExternalShutdownException, MultiThreadedExecutor
+from rclpy.node import Node
+from rclpy.signals import SignalHandlerOptions
+from trajectory_msgs.msg import JointTrajectory
+
+from ur_sim_driver.errors import TrajectoryError
+from ur_sim_driver.gateway.dds_profile import free_received_samples
+from ur_sim_driver.gateway.gateway_link import (
+    STOP,
+    Ack,
+    Activation,
+    Cancel,
+    Canceled,
+    Dropped,
+    Ended,
+    Feedback,
+    Gate,
+    GatewayConfig,
+    Start,
+)
+from ur_sim_driver.gateway.goal_intake import ArrayGoalActionServer, intake_error
+from ur_sim_driver.gateway.memory import release_memory, trim_heap, use_mmap_for_large_blocks
+from ur_sim_driver.gateway.trajectory_cdr import read_joint_trajectory
+from ur_sim_driver.motion import conversions as conv
+from ur_sim_driver.motion import passthrough, result_codes
+from ur_sim_driver.motion.command_arrays import CommandArrays, from_points
+from ur_sim_driver.motion.tolerances import resolve_tolerances
+from ur_sim_driver.motion.validation import validate_trajectory
+
+# From this many points on, the memory of a received trajectory is handed back to the system when it is done.
+LARGE_TRAJECTORY = 10_000
+# A start stamp this far ahead of the simulated clock is accepted (upstream does) but logged [s].
+FAR_FUTURE = 5.0
+# How long a goal to an inactive controller waits for an activation in flight before it is rejected [s].
+ACTIVATION_GRACE = 0.05
+_SHUTDOWN = Ended(None, result_codes.INVALID_GOAL, 'ur_sim is shutting down.')
+# Upstream JTC's words while it is inactive (goals; topic messages).
+INACTIVE_GOAL = "Can't accept new action goals. Controller is not running."
+INACTIVE_TOPIC = "Can't accept new commands. subscriber is inactive"  # (logged by the simulation side)
+
+
+class _Waiter:
+    """One goal's end, handed from the receiving thread to the goal's execute callback."""
+
+    def __init__(self, points: int) -> None:
+        self.points = points  # the trajectory's length
+        self.event = threading.Event()
+        self.ended: Ended | None = None
+        self.canceled: bool | None = None
+
+
+class _Shared:
+    """What the controllers of this process share: the pipe (one sender at a time) and the robot's state."""
+
+    def __init__(self, conn: Connection, sim_time: mmap.mmap) -> None:
+        self.conn = conn
+        self.send_lock = threading.Lock()
+        self.sim_time = sim_time
+        self.refusal: str | None = None  # why the robot cannot move now (from the simulation), or None
+
+
+class TrajectoryGateway:
+    """One controller's action server and topic subscription on `node`, talking to the simulation."""
+
+    def __init__(self, node: Node, cfg: GatewayConfig, name: str, shared: _Shared) -> None:
+        self.node = node
+        self.cfg = cfg
+        self.name = name
+        self._shared = shared
+        self._sim_time = shared.sim_time
+        self._lock = threading.Lock()
+        self._waiters: dict[bytes, _Waiter] = {}
+        self._handles: dict[bytes, object] = {}
+        self._pending: dict[int, CommandArrays] = {}  # converted goals between goal callback and acceptance
+        self.active = name in cfg.active
+        self.passthrough = name in cfg.passthrough
+        ns = cfg.namespace.strip('/')
+        base = f'/{ns}/{name}' if ns else f'/{name}'
+        ordered = MutuallyExclusiveCallbackGroup()
+        # Goal requests arrive without their points, which come as arrays (goal_intake.py).
+        self._action = ArrayGoalActionServer(
+            node, f'{base}/follow_joint_trajectory', execute_callback=self._execute,
+            goal_callback=self._on_goal, handle_accepted_callback=self._on_accepted,
+            cancel_callback=lambda _: CancelResponse.ACCEPT, callback_group=ordered)
+        if not self.passthrough:  # upstream's passthrough controller has no topic interface
+            node.create_subscription(JointTrajectory, f'{base}/joint_trajectory', self._on_topic, 10,
+                                     callback_group=ordered, raw=True)
+
+    def _wait_active(self, timeout: float) -> bool:
+        """Whether the controller is active, allowing an activation already on its way through the pipe (the
+        controller_stopper restores a controller in the cycle after the robot can move again) to arrive."""
+        deadline = time.monotonic() + timeout
+        while not self.active and time.monotonic() < deadline:
+            time.sleep(0.002)
+        return self.active
+
+    @property
+    def refusal(self) -> str | None:
+        return self._shared.refusal
+
+    # ---- validation --------------------------------------------------------------------------------
+    def _validate(self, cmd: CommandArrays, what: str) -> str | None:
+        cfg = self.cfg
+        (now,) = struct.unpack_from('d', self._sim_time, 0)
+        strict = cfg.strict_limits
+        # The passthrough controller needs every joint and does not look at the end velocity.
+        reason = validate_trajectory(
+            cmd, joint_names_config=cfg.joints, now=now, q_min=cfg.q_min if strict else None,
+            q_max=cfg.q_max if strict else None, v_max=cfg.v_max if strict else None,
+            allow_partial=cfg.allow_partial and not self.passthrough,
+            allow_nonzero_end_velocity=cfg.allow_nonzero_end_velocity or self.passthrough)
+        if reason is None and cmd.header_stamp - now > FAR_FUTURE:
+            self.node.get_logger().warning(
+                f'{what} starts at header.stamp {cmd.header_stamp:.3f} s, {cmd.header_stamp - now:.1f} s after '
+                f'the simulated time now ({now:.3f} s); it waits until then. A client stamping with its wall '
+                'clock while ur_sim runs on simulated time (use_sim_time:=true for the client) is the likely '
+                'cause; a zero stamp starts at once.')
+        return reason
+
+    def _on_goal(self, goal: FollowJointTrajectory.Goal) -> GoalResponse:
+        cmd = self._action.arrays_of(goal)
+        if cmd is None:  # converted by rclpy: the points are in the message
+            traj = goal.trajectory
+            cmd = from_points(traj.joint_names, conv.time_to_sec(traj.header.stamp), traj.points)
+        # Upstream's JTC rejects goals while inactive, and the controller_stopper deactivates it while the robot
+        # cannot move. (Topic messages are refused by the simulation, which knows the state without delay.)
+        refusal = self.refusal
+        if refusal is not None:  # deactivated by the controller_stopper: name the robot's state
+            reason = f'the controller is not running: {refusal}'
+        elif not self._wait_active(ACTIVATION_GRACE):
+            reason = passthrough.INACTIVE if self.passthrough else INACTIVE_GOAL
+        elif self.passthrough and self._busy():
+            reason = passthrough.BUSY
+        else:
+            reason = self._validate(cmd, 'FollowJointTrajectory goal')
+        if reason is None and self.passthrough:
+            reason = passthrough.check_goal(cmd, self.cfg.joints, [t.name for t in goal.goal_tolerance])
+        if reason is None and goal.multi_dof_trajectory.points:
+            reason = 'multi_dof_trajectory is not supported by this controller (it has no multi-DOF joints)'
+        if reason is not None:
+            self.node.get_logger().error(f'Rejected FollowJointTrajectory goal: {reason}')
+            return GoalResponse.REJECT
+        self._pending[id(goal)] = cmd
+        return GoalResponse.ACCEPT
+
+    def _busy(self) -> bool:
+        with self._lock:
+            return bool(self._waiters) or bool(self._pending)
+
+    def _on_accepted(self, goal_handle) -> None:
+        goal = goal_handle.request
+        cmd = self._pending.pop(id(goal))
+        if self.passthrough:
+            tolerances = passthrough.tolerances_of(conv.tolerance_specs(goal.goal_tolerance), self.cfg.joints,
+                                                   conv.duration_to_sec(goal.goal_time_tolerance))
+        else:
+            tolerances, reason = resolve_tolerances(
+                self.cfg.defaults, self.cfg.joints, conv.tolerance_specs(goal.path_tolerance),
+                conv.tolerance_specs(goal.goal_tolerance), conv.duration_to_sec(goal.goal_time_tolerance))
+            if reason is not None:
+                self.node.get_logger().error(f'Goal tolerances ignored, using the defaults: {reason}')
+        large = cmd.count >= LARGE_TRAJECTORY
+        self._start(goal_handle, cmd, tolerances)
+        if large:
+            # Handed over: the taken C request's many small blocks and the arrays were freed in executor
+            # threads' heaps, which keep the pages until trimmed.
+            del cmd
+            trim_heap()
+
+    def _start(self, goal_handle, cmd, tolerances) -> None:
+        token = bytes(goal_handle.goal_id.uuid)
+        with self._lock:
+            self._waiters[token] = _Waiter(cmd.count)
+            self._handles[token] = goal_handle
+        self._send(Start(token, cmd, tolerances, self.name))
+        goal_handle.execute()
+
+    def _on_topic(self, data: bytes) -> None:
+        # Whether the controller is active is decided by the simulation, which knows it without delay (a message
+        # right after the robot can move again meets the controller that the controller_stopper restores).
+        try:
+            cmd = read_joint_trajectory(data)
+        except TrajectoryError as exc:
+            self.node.get_logger().error(f'Dropped JointTrajectory message: {exc}')
+            self._send(Dropped(self.name))
+            return
+        reason = self._validate(cmd, 'JointTrajectory message')
+        if reason is not None:
+            self.node.get_logger().error(f'Dropped JointTrajectory message: {reason}')
+            self._send(Dropped(self.name))
+            return
+        self._send(Start(None, cmd, None, self.name))
+        if cmd.count >= LARGE_TRAJECTORY:
+            del cmd
+            trim_heap()  # the arrays may have been carved from an executor thread's heap: give its pages back
+
+    # ---- execution -----------------------------------------------------------------------------------
+    def _execute(self, goal_handle) -> FollowJointTrajectory.Result:
+        token = bytes(goal_handle.goal_id.uuid)
+        with self._lock:
+            waiter = self._waiters[token]
+        cancel_sent = False
+        while not waiter.event.wait(0.005):
+            if goal_handle.is_cancel_requested and not cancel_sent:
+                self._send(Cancel(token, self.name))
+                cancel_sent = True
+        with self._lock:
+            self._waiters.pop(token, None)
+            self._handles.pop(token, None)
+        # Drop the request: rclpy keeps the handle until the result expires (15 min).
+        large = waiter.points >= LARGE_TRAJECTORY
+        goal_handle._goal_request = None
+        if large:
+            # Once more a little later: rclpy lets go of the message's last references after this returns.
+            release_memory()
+            threading.Timer(1.0, release_memory).start()
+        if waiter.canceled:
+            goal_handle.canceled()
+            self.node.get_logger().info('Goal canceled; holding the measured position')
+            return FollowJointTrajectory.Result(error_code=result_codes.SUCCESSFUL,
+                                                error_string='Goal canceled by the client.')
+        ended = waiter.ended
+        result = FollowJointTrajectory.Result(error_code=ended.code, error_string=ended.message)
+        if ended.code == result_codes.SUCCESSFUL and not ended.aborted:
+            goal_handle.succeed()
+        else:
+            self.node.get_logger().warning(f'Goal aborted ({result_codes.NAMES[ended.code]}): {ended.message}')
+            goal_handle.abort()
+        return result
+
+    def _send(self, message: object) -> None:
+        _send(self._shared, message)
+
+    def owns(self, token: bytes) -> bool:
+        with self._lock:
+            return token in self._waiters
+
+    def end_all(self) -> None:
+        """The simulation is gone: every goal ends."""
+        with self._lock:
+            waiters = list(self._waiters.values())
+        for waiter in waiters:
+            if not waiter.event.is_set():
+                waiter.ended = _SHUTDOWN
+                waiter.event.set()
+
+    def dispatch(self, message: object) -> None:
+        """An Ended, Canceled or Feedback for one of this controller's goals."""
+        with self._lock:
+            waiter = self._waiters.get(message.token)
+            handle = self._handles.get(message.token)
+        if waiter is None:
+            return
+        if isinstance(message, Ended):
+            waiter.ended = message
+            waiter.event.set()
+        elif isinstance(message, Canceled):
+            if message.ok:
+                waiter.canceled = True
+                waiter.event.set()
+        elif isinstance(message, Feedback) and handle is not None:
+            fb = FollowJointTrajectory.Feedback()
+            fb.header.stamp = conv.sec_to_time(message.t)
+            fb.joint_names = list(self.cfg.joints)
+            fb.desired = conv.trajectory_point(*message.desired)
+            fb.actual = conv.trajectory_point(*message.actual)
+            fb.error = conv.trajectory_point(*message.error)
+            try:
+                handle.publish_feedback(fb)
+            except Exception:  # the goal may have ended in an executor thread meanwhile
+                pass
+
+
+def _send(shared: _Shared, message: object) -> None:
+    with shared.send_lock:
+        try:
+            shared.conn.send(message)
+        except (OSError, BrokenPipeError):
+            pass  # the simulation is gone; the receiving thread ends every goal
+
+
+def _receive(shared: _Shared, gateways: dict[str, TrajectoryGateway], stopped: threading.Event) -> None:
+    """Hand the simulation's messages to the controllers until it says stop or the pipe closes."""
+    try:
+        while True:
+            message = shared.conn.recv()
+            if message == STOP:
+                break
+            if isinstance(message, Gate):
+                shared.refusal = message.reason
+            elif isinstance(message, Activation):
+                gateway = gateways.get(message.controller)
+                if gateway is not None:
+                    gateway.active = message.active
+                _send(shared, Ack(message.seq))
+            else:
+                for gateway in gateways.values():
+                    if gateway.owns(message.token):
+                        gateway.dispatch(message)
+                        break
+    except (OSError, EOFError):
+        pass
+    for gateway in gateways.values():
+        gateway.end_all()
+    stopped.set()
+
+
+def run_gateway(conn: Connection, sim_time: mmap.mmap) -> None:
+    """Serve the controllers' interfaces until the simulation says stop (or its end of the pipe closes)."""
+    # The parent stops this process through the pipe; Ctrl-C in a terminal reaches both, and the parent must
+    # be the one to decide (it ends the goals first).
+    signal.signal(signal.SIGINT, signal.SIG_IGN)
+    faulthandler.register(signal.SIGUSR1)  # `kill -USR1 <pid>` prints every thread's stack, for a hang
+    use_mmap_for_large_blocks()
+    cfg: GatewayConfig = conn.recv()
+    profile = free_received_samples()  # a large goal's receive buffer is not kept after it
+    rclpy.init(signal_handler_options=SignalHandlerOptions.NO)
+    shared = _Shared(conn, sim_time)
+    executor = MultiThreadedExecutor(num_threads=4)
+    gateways: dict[str, TrajectoryGateway] = {}
+    try:
+        for name in cfg.controllers:
+            node = Node(name, namespace=cfg.namespace or '/')
+            gateways[name] = TrajectoryGateway(node, cfg, name, shared)
+            executor.add_node(node)
+    finally:
+        if profile is not None:
+            profile.unlink(missing_ok=True)  # read when the first node was made
+    if intake_error() is not None and gateways:
+        next(iter(gateways.values())).node.get_logger().warning(
+            f'goal requests are converted point by point (slow for long trajectories): {intake_error()}')
+    stopped = threading.Event()
+    threading.Thread(target=_receive, args=(shared, gateways, stopped), name='gateway_receive', daemon=True).start()
+    try:
+        while not stopped.is_set() and rclpy.ok():
+            executor.spin_once(timeout_sec=0.05)
+        # Let the execute callbacks return their (shutdown) results before the context goes.
+        for _ in range(20):
+            executor.spin_once(timeout_sec=0.01)
+    except (KeyboardInterrupt, ExternalShutdownException):
+        pass
+    finally:
+        executor.shutdown(timeout_sec=2.0)
+        for gateway in gateways.values():
+            gateway.node.destroy_node()
+        rclpy.try_shutdown()
+        conn.close()
+
+
+def main() -> None:
+    """``python -m ur_sim_driver.gateway.trajectory_gateway PIPE_FD TIME_FD``, as GatewayLink starts it."""
+    pipe_fd, time_fd = int(sys.argv[1]), int(sys.argv[2])
+    run_gateway(Connection(pipe_fd), mmap.mmap(time_fd, 8))
+
+
+if __name__ == '__main__':
+    main()

@@ -1,0 +1,187 @@
+"""Validated configuration of the `ur_sim` node, built from plain parameter values (no rclpy)."""
+from __future__ import annotations
+
+import math
+from collections.abc import Mapping
+from dataclasses import dataclass
+from typing import Any
+
+from ur_sim_driver.errors import ConfigError
+from ur_sim_driver.robot.dispenser import DispenserParams, dispenser_params
+from ur_sim_driver.robot.safety import DEFAULT_CONTACT_FORCE, DEFAULT_FORCE_WINDOW
+
+UR_TYPES = ('ur5', 'ur5e', 'ur10', 'ur10e')
+TOOLS = ('none', 'dispenser')
+SCENES = ('empty', 'windshield')
+DEFAULT_JOINTS = ('shoulder_pan_joint', 'shoulder_lift_joint', 'elbow_joint',
+                  'wrist_1_joint', 'wrist_2_joint', 'wrist_3_joint')
+
+
+@dataclass(frozen=True)
+class JointConstraint:
+    """Default JTC tolerances of one joint: `trajectory` (path) and `goal` position [rad]."""
+
+    trajectory: float = 0.2
+    goal: float = 0.1
+
+
+@dataclass(frozen=True)
+class SimConfig:
+    """Everything `ur_sim` needs to start. Defaults are the UR driver's."""
+
+    ur_type: str = 'ur5e'
+    tf_prefix: str = ''
+    namespace: str = ''
+    joints: tuple[str, ...] = DEFAULT_JOINTS
+    controller_name: str = 'scaled_joint_trajectory_controller'
+    initial_positions: tuple[float, ...] = (0.0, -1.57, 0.0, -1.57, 0.0, 0.0)
+    action_monitor_rate: float = 20.0
+    allow_partial_joints_goal: bool = False
+    allow_nonzero_velocity_at_trajectory_end: bool = False
+    strict_limit_checks: bool = False
+    start_powered_off: bool = False
+    programs: tuple[str, ...] = ('wait_program.urp',)
+    protective_stop_force: float = DEFAULT_CONTACT_FORCE
+    protective_stop_window: float = DEFAULT_FORCE_WINDOW  # [s] the safety system's mean of the contact force
+    update_rate: float = 0.0
+    physics_substeps: int = 0
+    speed_scaling_initial_factor: float = 1.0
+    real_time_factor: float = 1.0
+    thread_priority: int = 50  # SCHED_FIFO priority of the real-time loop, as ros2_control_node's; 0: normal
+    tool: str = 'none'
+    scene: str = 'empty'
+    base_pose: tuple[float, ...] = (0.0, 0.0, 0.0, 0.0, 0.0, 0.0)
+    viewer: bool = False
+    stopped_velocity_tolerance: float = 0.2
+    goal_time: float = 0.0
+    constraints: tuple[JointConstraint, ...] = (JointConstraint(),) * 6
+    publish_frequency: float = 20.0  # [Hz] of simulated time: robot_state_publisher's /tf
+    dispenser: DispenserParams = DispenserParams()  # the glue dispenser's model (tool: dispenser only)
+
+    def prefixed(self, name: str) -> str:
+        """`name` under the configured namespace, e.g. '/ur10/joint_states'."""
+        ns = self.namespace.strip('/')
+        return f'/{ns}/{name}' if ns else f'/{name}'
+
+
+def _choice(name: str, value: Any, choices: tuple[str, ...]) -> str:
+    if value not in choices:
+        raise ConfigError(f"parameter '{name}' = {value!r} is invalid; valid choices: {', '.join(choices)}")
+    return value
+
+
+def _number(name: str, value: Any, lo: float, hi: float, *, lo_open: bool = False) -> float:
+    try:
+        x = float(value)
+    except (TypeError, ValueError):
+        raise ConfigError(f"parameter '{name}' = {value!r} is not a number") from None
+    bad_lo = x <= lo if lo_open else x < lo
+    if not math.isfinite(x) or bad_lo or x > hi:
+        bracket = '(' if lo_open else '['
+        raise ConfigError(f"parameter '{name}' = {value!r} is outside the allowed range {bracket}{lo}, {hi}]")
+    return x
+
+
+def _integer(name: str, value: Any, lo: int, hi: int) -> int:
+    if isinstance(value, bool) or not isinstance(value, int) or not lo <= value <= hi:
+        raise ConfigError(f"parameter '{name}' = {value!r} must be an integer in [{lo}, {hi}]")
+    return value
+
+
+def sim_config_from_params(params: Mapping[str, Any]) -> SimConfig:
+    """Validate raw parameter values into a SimConfig.
+
+    Args:
+        params: flat mapping as ROS parameters give it, e.g. {'ur_type': 'ur10',
+            'constraints.goal_time': 0.1, 'constraints.elbow_joint.goal': 0.05}. Missing keys take defaults.
+
+    Raises:
+        ConfigError: naming the parameter, the value and the allowed range or choices.
+    """
+    d = SimConfig()
+    get = params.get
+    joints = tuple(get('joints', d.joints))
+    if len(joints) != 6 or len(set(joints)) != 6 or not all(isinstance(j, str) and j for j in joints):
+        raise ConfigError(f"parameter 'joints' = {list(joints)!r} must be 6 distinct non-empty joint names")
+    initial = tuple(float(x) for x in get('initial_positions', d.initial_positions))
+    if len(initial) != 6 or not all(math.isfinite(x) for x in initial):
+        raise ConfigError(f"parameter 'initial_positions' = {list(initial)!r} must be 6 finite numbers [rad]")
+    substeps = get('physics_substeps', d.physics_substeps)
+    if isinstance(substeps, bool) or not isinstance(substeps, int) or not 0 <= substeps <= 100:
+        raise ConfigError(f"parameter 'physics_substeps' = {substeps!r} must be a whole number in [0, 100] "
+                          '(0: automatic, physics step <= 2 ms)')
+    constraints = []
+    prefix = str(get('tf_prefix', d.tf_prefix))
+    for j in joints:
+        # Keys may name the joint with its tf_prefix (as ur_controllers.yaml does) or without.
+        key = f'constraints.{prefix}{j}' if f'constraints.{prefix}{j}.goal' in params or \
+            f'constraints.{prefix}{j}.trajectory' in params else f'constraints.{j}'
+        constraints.append(JointConstraint(
+            trajectory=_number(f'{key}.trajectory', get(f'{key}.trajectory', 0.2), 0.0, 10.0),
+            goal=_number(f'{key}.goal', get(f'{key}.goal', 0.1), 0.0, 10.0),
+        ))
+    base_pose = tuple(float(x) for x in get('base_pose', d.base_pose))
+    if len(base_pose) != 6 or not all(math.isfinite(x) for x in base_pose):
+        raise ConfigError(f"parameter 'base_pose' = {list(base_pose)!r} must be 6 finite numbers "
+                          '[x, y, z [m], roll, pitch, yaw [rad]]')
+    update_rate = _number('update_rate', get('update_rate', d.update_rate), 0.0, 5000.0)
+    if 0.0 < update_rate < 10.0:
+        raise ConfigError(f"parameter 'update_rate' = {update_rate} is outside the allowed range: 0 (type default) "
+                          'or [10, 5000] Hz')
+    return SimConfig(
+        ur_type=_choice('ur_type', get('ur_type', d.ur_type), UR_TYPES),
+        tf_prefix=str(get('tf_prefix', d.tf_prefix)),
+        namespace=str(get('namespace', d.namespace)),
+        joints=joints,
+        controller_name=_controller_name(get('controller_name', d.controller_name)),
+        initial_positions=initial,
+        action_monitor_rate=_number('action_monitor_rate', get('action_monitor_rate', d.action_monitor_rate),
+                                    0.0, 1000.0, lo_open=True),
+        allow_partial_joints_goal=bool(get('allow_partial_joints_goal', d.allow_partial_joints_goal)),
+        allow_nonzero_velocity_at_trajectory_end=bool(
+            get('allow_nonzero_velocity_at_trajectory_end', d.allow_nonzero_velocity_at_trajectory_end)),
+        strict_limit_checks=bool(get('strict_limit_checks', d.strict_limit_checks)),
+        start_powered_off=bool(get('start_powered_off', d.start_powered_off)),
+        programs=_programs(get('programs', d.programs)),
+        protective_stop_force=_number('protective_stop_force', get('protective_stop_force',
+                                                                   d.protective_stop_force), 0.0, 1e4,
+                                      lo_open=True),
+        protective_stop_window=_number('protective_stop_window', get('protective_stop_window',
+                                                                     d.protective_stop_window), 0.0, 1.0),
+        update_rate=update_rate,
+        physics_substeps=substeps,
+        speed_scaling_initial_factor=_number('speed_scaling_initial_factor',
+                                             get('speed_scaling_initial_factor', d.speed_scaling_initial_factor),
+                                             0.0, 1.0),
+        real_time_factor=_number('real_time_factor', get('real_time_factor', d.real_time_factor), 0.0, 100.0),
+        thread_priority=_integer('thread_priority', get('thread_priority', d.thread_priority), 0, 99),
+        tool=_choice('tool', get('tool', d.tool), TOOLS),
+        scene=_choice('scene', get('scene', d.scene), SCENES),
+        base_pose=base_pose,
+        viewer=bool(get('viewer', d.viewer)),
+        stopped_velocity_tolerance=_number('constraints.stopped_velocity_tolerance',
+                                           get('constraints.stopped_velocity_tolerance', 0.2), 0.0, 10.0),
+        goal_time=_number('constraints.goal_time', get('constraints.goal_time', 0.0), 0.0, 3600.0),
+        constraints=tuple(constraints),
+        publish_frequency=_number('publish_frequency', get('publish_frequency', d.publish_frequency), 0.0, 1000.0,
+                                  lo_open=True),
+        dispenser=dispenser_params(params),
+    )
+
+
+def _programs(value: Any) -> tuple[str, ...]:
+    # Program files the simulated robot holds besides external_control.urp (the dashboard can load them).
+    names = (value,) if isinstance(value, str) else tuple(value)
+    for name in names:
+        if not isinstance(name, str) or not name.endswith('.urp') or '/' in name or name == '.urp':
+            raise ConfigError(f"parameter 'programs' = {list(names)!r} must be program file names ending in "
+                              f"'.urp' without a directory; {name!r} is not")
+    return names
+
+
+def _controller_name(value: Any) -> str:
+    name = str(value)
+    if not name or not all(c.isalnum() or c == '_' for c in name) or name[0].isdigit():
+        raise ConfigError(f"parameter 'controller_name' = {value!r} is not a valid ROS name "
+                          '(letters, digits and underscores, not starting with a digit)')
+    return name

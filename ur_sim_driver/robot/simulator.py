@@ -1,0 +1,173 @@
+"""The simulated arm as the node sees it: model, physics and low-level control built from a SimConfig."""
+from __future__ import annotations
+
+import math
+from typing import Protocol
+
+import numpy as np
+
+from ur_sim_driver.description.mjcf import FT_FORCE_SENSOR, FT_TORQUE_SENSOR, PAYLOAD_BODY, add_static_mesh, build_mjcf
+from ur_sim_driver.description.params import joint_names as model_joint_names
+from ur_sim_driver.description.params import load_ur_params
+from ur_sim_driver.description.scene import load_scene, pose_matrix
+from ur_sim_driver.description.tool import get_tool
+from ur_sim_driver.description.urdf import build_urdf
+from ur_sim_driver.errors import ConfigError
+from ur_sim_driver.physics.joint_control import JointControl
+from ur_sim_driver.physics.physics import ArmPhysics, ArmState
+from ur_sim_driver.physics.servo import JointServo, Setpoint
+from ur_sim_driver.physics.torque_control import PdGains
+from ur_sim_driver.robot.io_bank import IoBank
+from ur_sim_driver.robot.payload import NO_PAYLOAD, Payload, make_payload
+from ur_sim_driver.robot.sim_config import SimConfig
+
+MAX_PHYSICS_STEP = 0.002  # [s] automatic substeps keep the physics step at or below this
+# Share of a joint's effort limit the servo plans accelerations with; the rest is margin for the feedback.
+EFFORT_SHARE = 0.9
+# The servo follows the reference with the type's acceleration limit (5 rad/s^2, MoveIt's conservative value;
+# UR publishes none) plus this slack, so that plans made exactly at the limit are passed through unchanged.
+ACCEL_SLACK = 1.05
+# To stop (at a final point, a hold position or a position limit) the arm brakes harder, up to this multiple
+# of that limit where its torques allow (more makes several joints braking at once saturate their torques).
+BRAKE_CAPABILITY = 2.0
+# Freedrive: the joints' viscous damping is their own inertia over this time constant [s] (light: a push keeps
+# the arm moving for about this long). The limits hold with the joint's full effort: it is reached this far above
+# the velocity limit [rad/s] and this far past a position limit [rad].
+FREEDRIVE_TAU = 0.2
+FREEDRIVE_VELOCITY_BAND = 0.05
+FREEDRIVE_POSITION_BAND = 0.01
+
+
+class JointReference(Protocol):
+    """What the robot is commanded each control period (a trajectory controller's sample is one)."""
+
+    positions: np.ndarray  # (n,) [rad]
+    velocities: np.ndarray  # (n,) [rad/s]
+    accelerations: np.ndarray  # (n,) [rad/s^2]
+
+
+class Simulator:
+    """Arm physics plus its computed-torque joint controller, for one configuration.
+
+    Interface joint i is model joint i: `cfg.joints` only renames them (a tf_prefix is added where missing).
+    """
+
+    def __init__(self, cfg: SimConfig) -> None:
+        self.params = load_ur_params(cfg.ur_type)
+        tool = get_tool(cfg.tool)
+        self.control_rate = cfg.update_rate or self.params.control_rate
+        self.control_dt = 1.0 / self.control_rate
+        substeps = cfg.physics_substeps or max(1, math.ceil(self.control_dt / MAX_PHYSICS_STEP - 1e-9))
+        # The mount only places the arm in the MuJoCo world (floor, scene); interfaces stay in the base frames.
+        mount = pose_matrix(cfg.base_pose[:3], cfg.base_pose[3:]) if any(cfg.base_pose) else None
+        xml = build_mjcf(self.params, tf_prefix=cfg.tf_prefix, tool=tool, base_pose=mount,
+                         timestep=self.control_dt / substeps)
+        if cfg.scene != 'empty':
+            for name, mesh, pose, collide in load_scene(cfg.scene):
+                xml = add_static_mesh(xml, name, mesh, pose, collide=collide)
+        self.mjcf = xml
+        self.urdf = build_urdf(self.params, tf_prefix=cfg.tf_prefix, tool=tool)
+        pre = cfg.tf_prefix
+        self.joint_names = tuple(j if j.startswith(pre) else pre + j for j in cfg.joints)
+        self.physics = ArmPhysics(xml, model_joint_names(pre), self.control_dt, substeps,
+                                  base_body=f'{pre}base', tcp_site=f'{pre}tool0', payload_body=pre + PAYLOAD_BODY,
+                                  ft_sensors=(pre + FT_FORCE_SENSOR, pre + FT_TORQUE_SENSOR))
+        q0 = np.array(cfg.initial_positions)
+        bad = np.flatnonzero((q0 < self.params.q_min) | (q0 > self.params.q_max))
+        if bad.size:
+            i = int(bad[0])
+            raise ConfigError(f"parameter 'initial_positions' [{i}] = {q0[i]} rad is outside the joint limits "
+                              f'[{self.params.q_min[i]:.4f}, {self.params.q_max[i]:.4f}] of {self.joint_names[i]}')
+        self.physics.reset(q0)
+        self.gains = PdGains.critically_damped(len(q0), self.control_rate)
+        self.servo = JointServo(q0, self.control_rate)
+        self.a_max = np.full(len(q0), self.params.a_max)
+        p = self.params
+        self.control = JointControl(self.servo, self.gains, p.v_max, p.effort_max, p.q_min, p.q_max,
+                                    effort_share=EFFORT_SHARE * p.effort_max, a_floor=0.05 * self.a_max,
+                                    a_follow=ACCEL_SLACK * self.a_max, a_brake=BRAKE_CAPABILITY * self.a_max,
+                                    dt=self.control_dt)
+        self._servo_active = False  # the servo made the last cycle's setpoint (not freedrive, not before any)
+        # The robot's IO (immutable; replaced under the simulation lock, read as one snapshot without it).
+        self.io = IoBank()
+        self.payload: Payload = NO_PAYLOAD
+        self._ft_offset = np.zeros(6)
+
+    @property
+    def time(self) -> float:
+        """Simulated time [s]."""
+        return self.physics.time
+
+    def state(self) -> ArmState:
+        """Measured joint state now."""
+        return self.physics.state()
+
+    def advance(self, state: ArmState, ref: JointReference, stop: np.ndarray | None = None) -> np.ndarray:
+        """Track `ref` from `state` for one control period; return the applied torques (n,) [N m].
+
+        The robot's servo turns the reference into a setpoint within the joint limits (``servo.py``), never
+        passing `stop` (n,) [rad]; the computed-torque controller tracks the setpoint.
+        """
+        mass, bias = self.physics.dynamics()
+        # The joints' reachable accelerations, the servo and the computed torques: one compiled call.
+        tau = self.control.torques(mass, bias, state.q, state.qd, ref.positions, ref.velocities,
+                                   ref.accelerations, stop)
+        self._servo_active = True
+        self.physics.step(tau)
+        return tau
+
+    @property
+    def last_setpoint(self) -> Setpoint | None:
+        """The servo's setpoint of the last cycle (None in freedrive and before the first cycle)."""
+        return self.control.last_setpoint() if self._servo_active else None
+
+    def advance_free(self, state: ArmState) -> np.ndarray:
+        """Freedrive for one control period: torques that cancel gravity and Coriolis (the model's bias) with light
+        viscous damping, so that the arm moves under external forces; the limits still hold (velocity above its
+        limit and positions beyond a limit are pushed back), within the effort limits. Returns the torques (n,)
+        [N m]. The servo restarts from the measured state, so that position control resumes without a jump."""
+        p = self.params
+        mass, bias = self.physics.dynamics()
+        inertia = np.diag(mass)
+        q, qd = state.q, state.qd
+        tau = bias - inertia / FREEDRIVE_TAU * qd
+        excess = qd - np.clip(qd, -p.v_max, p.v_max)
+        tau -= p.effort_max * np.clip(excess / FREEDRIVE_VELOCITY_BAND, -1.0, 1.0)
+        beyond = np.minimum(q - p.q_min, 0.0) + np.maximum(q - p.q_max, 0.0)
+        tau -= p.effort_max * np.clip(beyond / FREEDRIVE_POSITION_BAND, -1.0, 1.0)
+        tau = np.clip(tau, -p.effort_max, p.effort_max)
+        self.physics.step(tau)
+        after = self.physics.state()
+        self.servo.reset(after.q, after.qd)
+        self._servo_active = False
+        return tau
+
+    def tcp_pose(self) -> tuple[np.ndarray, np.ndarray]:
+        """tool0 in the base frame: position (3,) [m], quaternion (x, y, z, w)."""
+        return self.physics.tcp_pose()
+
+    def set_payload(self, mass: float, cog: np.ndarray, inertia: np.ndarray) -> None:
+        """Mount a payload at the flange (call under the simulation lock).
+
+        Args:
+            mass: [kg] (0: none).
+            cog: (3,) centre of gravity in tool0 [m].
+            inertia: (6,) ixx, iyy, izz, ixy, ixz, iyz about the centre of gravity, tool0 axes [kg m^2].
+
+        Raises:
+            ConfigError: an invalid value (see ``payload.make_payload``); the payload is unchanged then.
+        """
+        payload = make_payload(mass, cog, inertia)
+        moments, quat = payload.principal()
+        self.physics.set_payload(payload.mass, payload.cog, moments, quat)
+        self.payload = payload
+
+    def wrench(self) -> np.ndarray:
+        """(6,) force [N] and torque [N m] measured at the flange, in tool0 axes about the tool0 origin
+        (the driver's tool0_controller frame): what tool, payload and contacts exert on the arm, less the
+        reading at the last :meth:`zero_ftsensor`."""
+        return self.physics.wrench() - self._ft_offset
+
+    def zero_ftsensor(self) -> None:
+        """Take the current reading as the sensor's zero, as the robot's zero_ftsensor does."""
+        self._ft_offset = self.physics.wrench()

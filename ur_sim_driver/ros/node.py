@@ -1,0 +1,393 @@
+"""The `ur_sim` node: a MuJoCo-simulated UR arm behind the UR ROS 2 driver's interfaces.
+
+Threads: the simulation loop runs in its own thread (paced to the wall clock, or as fast as possible) and
+publishes every control cycle. The driver's controllers are components (``controllers/``), each its own node,
+held by the controller manager (``controllers/controller_manager_node.py``), which switches them between two
+cycles; the active joint controller (a trajectory or forward command controller) gives the robot its reference
+every cycle. The trajectory controllers' action servers and joint_trajectory subscriptions run in a process of
+their own (``trajectory_gateway.py``, started here), so that receiving a large trajectory never holds up the
+loop; a receiving thread hands its trajectories and cancels to their controller under one lock, and the
+controllers send back outcomes and feedback. All times on the interfaces are simulated time, which the node
+publishes on /clock.
+"""
+from __future__ import annotations
+
+import gc
+import os
+import signal
+import sys
+import threading
+import time
+
+import rclpy
+from rclpy.executors import ExternalShutdownException, MultiThreadedExecutor
+from rclpy.node import Node
+from rclpy.signals import SignalHandlerOptions
+from rosgraph_msgs.msg import Clock
+
+from ur_sim_driver.controllers.base import Component, Cycle, Host
+from ur_sim_driver.controllers.cdr_template import CdrTemplate
+from ur_sim_driver.controllers.controller_manager_node import ControllerManagerNode
+from ur_sim_driver.controllers.dispenser import SimulatedDispenser
+from ur_sim_driver.controllers.force_torque_sensor_broadcaster import ForceTorqueSensorBroadcaster
+from ur_sim_driver.controllers.forward_command import ForwardCommandController
+from ur_sim_driver.controllers.freedrive_mode import FreedriveModeController
+from ur_sim_driver.controllers.io_and_status import IoAndStatusController
+from ur_sim_driver.controllers.joint_command import HoldPosition, JointCommandController, JointCommander
+from ur_sim_driver.controllers.joint_state_broadcaster import JointStateBroadcaster
+from ur_sim_driver.controllers.joint_trajectory import JointTrajectoryControllerComponent
+from ur_sim_driver.controllers.passthrough_trajectory import PassthroughTrajectoryController
+from ur_sim_driver.controllers.speed_scaling_state_broadcaster import SpeedScalingStateBroadcaster
+from ur_sim_driver.controllers.tcp_pose_broadcaster import TcpPoseBroadcaster
+from ur_sim_driver.controllers.tool_contact import ToolContactController
+from ur_sim_driver.controllers.ur_configuration import UrConfigurationController
+from ur_sim_driver.errors import UrSimError
+from ur_sim_driver.gateway.gateway_link import Dropped, Gate, GatewayConfig, GatewayLink
+from ur_sim_driver.gateway.memory import use_mmap_for_large_blocks
+from ur_sim_driver.motion import conversions as conv
+from ur_sim_driver.motion.jtc import TrajectoryController
+from ur_sim_driver.motion.tolerances import default_tolerances
+from ur_sim_driver.robot.robot_state import NORMAL, RUNNING, RobotState
+from ur_sim_driver.robot.safety import ContactSafety, limit_cause
+from ur_sim_driver.robot.sim_config import SimConfig, sim_config_from_params
+from ur_sim_driver.robot.simulator import Simulator
+from ur_sim_driver.robot.speed_scaling import RobotSpeedScaling
+from ur_sim_driver.ros.dashboard import DashboardClient
+from ur_sim_driver.ros.robot_state_publisher import RobotStatePublisher
+from ur_sim_driver.ros.sim_io import SimulatedInputs
+from ur_sim_driver.ros.sim_wrench import AppliedWrenches
+from ur_sim_driver.ros.spin_thread import SpinThread
+
+GIL_SWITCH_INTERVAL = 2e-4  # [s]
+VIEWER_FRAME_PERIOD = 1.0 / 30.0  # [s] of wall time
+_CATCH_UP_LIMIT = 0.1  # [s] of wall time the real-time loop may fall behind before it stops catching up
+UNSCALED_CONTROLLER = 'joint_trajectory_controller'
+
+
+class UrSimNode(Node):
+    """Simulated UR arm with the UR driver's topics and FollowJointTrajectory action.
+
+    Args:
+        context: rclpy context (the global one when None).
+        parameter_overrides: parameters as if given with --ros-args -p (tests use this).
+        start: start the simulation loop thread immediately.
+    """
+
+    def __init__(self, *, context=None, parameter_overrides=None, start: bool = True) -> None:
+        super().__init__('ur_sim', context=context, parameter_overrides=parameter_overrides or [],
+                         allow_undeclared_parameters=True,
+                         automatically_declare_parameters_from_overrides=True)
+        self.cfg: SimConfig = sim_config_from_params(
+            {name: p.value for name, p in self._parameters.items() if name != 'use_sim_time'})
+        self._warn_unknown_parameters()
+        self.sim = Simulator(self.cfg)
+        use_mmap_for_large_blocks()  # long trajectories' arrays go back to the system when dropped
+        # The controller's joints carry the tf_prefix, as in the driver's ur_controllers.yaml.
+        self.joints = self.sim.joint_names
+        self._defaults = default_tolerances(
+            self.joints, trajectory=[c.trajectory for c in self.cfg.constraints],
+            goal=[c.goal for c in self.cfg.constraints], stopped_velocity=self.cfg.stopped_velocity_tolerance,
+            goal_time=self.cfg.goal_time)
+        # The robot's own speed scaling, whichever controller commands it.
+        self.scaling = RobotSpeedScaling(self.sim.params.v_max, self.sim.a_max, self.cfg.speed_scaling_initial_factor)
+        self._lock = threading.Lock()
+        self._stop = threading.Event()
+        self._cycle = 0
+        # Trajectories, cancels and dropped topic messages handled from the gateway, in order (read by tests and
+        # scripts that step the simulation themselves: a command has reached its controller when this counts it).
+        self.commands_received = 0
+        self.robot = RobotState(powered_off=self.cfg.start_powered_off, programs=self.cfg.programs)
+        self.contact_safety = ContactSafety(self.cfg.protective_stop_force,
+                                            max(1, round(self.cfg.protective_stop_window * self.sim.control_rate)))
+        self._refusal = self.robot.motion_refusal()
+
+        p = self.cfg.prefixed
+        ctrl = self.cfg.controller_name
+        self._pub_clock = self.create_publisher(Clock, '/clock', 10)
+
+        params = self.sim.params
+        trajectory_names = (ctrl,) if ctrl == UNSCALED_CONTROLLER else (ctrl, UNSCALED_CONTROLLER)
+        self._trajectory: dict[str, JointTrajectoryControllerComponent] = {}
+        self.gateway = GatewayLink(GatewayConfig(
+            controllers=(*trajectory_names, PassthroughTrajectoryController.name), active=(ctrl,),
+            passthrough=(PassthroughTrajectoryController.name,), namespace=self.cfg.namespace, joints=self.joints,
+            q_min=params.q_min, q_max=params.q_max, v_max=params.v_max, strict_limits=self.cfg.strict_limit_checks,
+            allow_partial=self.cfg.allow_partial_joints_goal,
+            allow_nonzero_end_velocity=self.cfg.allow_nonzero_velocity_at_trajectory_end,
+            defaults=self._defaults), self._on_gateway)
+        if self._refusal is not None:
+            self.gateway.send(Gate(self._refusal))
+
+        # The driver's controllers and nodes, one module each; the controller manager holds them.
+        self.host = Host(self.cfg, self.sim, self._lock, self.robot, self.scaling, self.context)
+        feedback_every = round(self.sim.control_rate / self.cfg.action_monitor_rate)
+        for name in trajectory_names:
+            core = TrajectoryController(self.joints, self._defaults, self.sim.state().q, params.v_max,
+                                        self.sim.a_max, self.cfg.speed_scaling_initial_factor if name == ctrl else 1.0,
+                                        scaling=self.scaling, scaled=name == ctrl)
+            self._trajectory[name] = JointTrajectoryControllerComponent(name, core, self.gateway, feedback_every,
+                                                                        initially_active=name == ctrl)
+        # The robot's own interpolation for the passthrough controller: the JTC's sampler, scaled by the robot.
+        self._passthrough = PassthroughTrajectoryController(
+            TrajectoryController(self.joints, self._defaults, self.sim.state().q, params.v_max, self.sim.a_max,
+                                 scaling=self.scaling, scaled=True), self.gateway)
+        self._gateway_controllers = {**self._trajectory, self._passthrough.name: self._passthrough}
+        self._tool_contact = ToolContactController()
+        self.components: list[Component] = [
+            JointStateBroadcaster(), SpeedScalingStateBroadcaster(), TcpPoseBroadcaster(),
+            IoAndStatusController(), UrConfigurationController(), DashboardClient(), SimulatedInputs(),
+            ForceTorqueSensorBroadcaster(), RobotStatePublisher(), SimulatedDispenser(),
+            *self._trajectory.values(), ForwardCommandController('position'), ForwardCommandController('velocity'),
+            self._passthrough, FreedriveModeController(), self._tool_contact, AppliedWrenches()]
+        for component in self.components:
+            component.configure(self.host)
+            if component.initially_active:
+                component.activate()
+        self.controller_manager = ControllerManagerNode(self.host, [c for c in self.components if c.is_controller])
+        self._commanders = [c for c in self.components if isinstance(c, JointCommandController)]
+        self._holder = HoldPosition()
+        self._commander: JointCommander | None = None
+        self.controller_manager.program_state_changed(self._refusal)
+
+        self._init_messages()
+        self._thread = threading.Thread(target=self._run, name='ur_sim_loop', daemon=True)
+        if start:
+            self._thread.start()
+        mode = 'as fast as possible' if self.cfg.real_time_factor == 0 else f'RTF {self.cfg.real_time_factor}'
+        self.get_logger().info(
+            f'{self.cfg.ur_type} simulated at {self.sim.control_rate:.0f} Hz control '
+            f'({self.sim.physics.substeps} physics substeps), {mode}; action '
+            f'{p(f"{ctrl}/follow_joint_trajectory")}')
+
+    # ---- set-up ----------------------------------------------------------------------------------
+    def _warn_unknown_parameters(self) -> None:
+        known = set(SimConfig.__dataclass_fields__) | {'use_sim_time', 'start_type_description_service'}
+        for name in self._parameters:
+            if name.split('.')[0] not in known and not name.startswith('constraints.'):
+                self.get_logger().warning(f"parameter '{name}' is not used by ur_sim; valid names: "
+                                          f"{', '.join(sorted(known - {'constraints'}))}, constraints.*")
+
+    def nodes(self) -> list[Node]:
+        """This node, the controller manager's and every component's: an executor spinning ur_sim must spin all."""
+        return [self, self.controller_manager.node, *(c.node for c in self.components if c.node is not None)]
+
+    @property
+    def jtc(self) -> TrajectoryController:
+        """The scaled trajectory controller's core (the driver's default controller)."""
+        return self._trajectory[self.cfg.controller_name].core
+
+    def _init_messages(self) -> None:
+        # CDR bytes patched in place (cdr_template.py)
+        self._clock_cdr = CdrTemplate(Clock(), stamps=('clock',), publisher=self._pub_clock)
+
+    # ---- from the gateway process (its receiving thread) -------------------------------------------------------
+    def _on_gateway(self, message: object) -> None:
+        """A trajectory, cancel or dropped topic message for one of the trajectory controllers."""
+        if isinstance(message, Dropped):
+            self.commands_received += 1
+            return
+        controller = self._gateway_controllers.get(message.controller)
+        if controller is None:  # only a bug gets here: the gateway serves exactly these controllers
+            self.get_logger().error(f'gateway message for unknown controller {message.controller!r}')
+            return
+        with self._lock:
+            # A robot state changed since the last cycle (a dashboard call) is seen now, as the driver's
+            # controller_stopper would have seen it before this message arrived.
+            self.robot.update(self.sim.time)
+            self._controller_stopper()
+        controller.on_gateway(message)
+        self.commands_received += 1
+
+    # ---- simulation loop (own thread) ------------------------------------------------------------
+    def _open_viewer(self):
+        """MuJoCo's passive viewer where a display exists (`viewer: true`), else None with a warning."""
+        if not self.cfg.viewer:
+            return None
+        if not (os.environ.get('DISPLAY') or os.environ.get('WAYLAND_DISPLAY')):
+            self.get_logger().warning('viewer: true but no display (DISPLAY is unset); running without a viewer')
+            return None
+        try:
+            import mujoco.viewer
+            return mujoco.viewer.launch_passive(self.sim.physics.model, self.sim.physics.data)
+        except Exception as exc:  # a broken GL setup must not stop the simulation
+            self.get_logger().warning(f'viewer could not be opened ({exc!r}); running without a viewer')
+            return None
+
+    def _run(self) -> None:
+        viewer = self._open_viewer()
+        next_frame = 0.0
+        dt = self.sim.control_dt
+        rtf = self.cfg.real_time_factor
+        wall_period = dt / rtf if rtf > 0 else 0.0
+        next_wall = time.perf_counter()
+        if wall_period > 0.0:
+            self._real_time_priority()
+        try:
+            while not self._stop.is_set():
+                self.step_once()
+                if viewer is not None and time.perf_counter() >= next_frame:
+                    with self._lock:
+                        viewer.sync()
+                    next_frame = time.perf_counter() + VIEWER_FRAME_PERIOD
+                if wall_period > 0.0:
+                    next_wall += wall_period
+                    delay = next_wall - time.perf_counter()
+                    if delay > 0.0:
+                        time.sleep(delay)
+                    elif delay < -_CATCH_UP_LIMIT:
+                        next_wall = time.perf_counter()
+                # As fast as possible the loop never yields on its own: the executor's threads get the GIL within
+                # the switch interval (GIL_SWITCH_INTERVAL) when they ask for it. A sleep(0) every 8 cycles cost
+                # 10 to 20 % of the rate (each one a system call that may sleep for the timer slack).
+        except Exception as exc:
+            if self._stop.is_set() or not self.context.ok():
+                return  # shutting down: publishers may already be gone
+            self.get_logger().fatal(f'simulation loop stopped: {exc!r}')
+            raise
+        finally:
+            if viewer is not None:
+                viewer.close()
+
+    def _real_time_priority(self) -> None:
+        """Run this (the loop's) thread under SCHED_FIFO at `thread_priority`, as ros2_control_node runs its
+        update thread, so that other processes' load does not delay its cycles. Only in real-time mode: as fast
+        as possible, a FIFO thread that never sleeps would starve the rest of the machine."""
+        priority = self.cfg.thread_priority
+        if priority == 0:
+            return
+        try:
+            os.sched_setscheduler(0, os.SCHED_FIFO, os.sched_param(priority))
+        except OSError as exc:  # not permitted (no CAP_SYS_NICE / rtprio limit): run as before, and say so
+            self.get_logger().warning(
+                f'could not run the simulation loop under SCHED_FIFO priority {priority} ({exc.strerror}); it runs '
+                'at normal priority and its period may jitter under load (allow it with an rtprio limit, e.g. in '
+                '/etc/security/limits.conf, or set thread_priority:=0 to silence this)')
+
+    def step_once(self) -> None:
+        """One control cycle: pending controller switches, robot state, the active joint controller's reference,
+        torques, physics step, safety, then the active components publish."""
+        with self._lock:
+            self.controller_manager.apply_pending()
+            state = self.sim.state()
+            self.robot.update(state.t)
+            self._controller_stopper()
+            commander = next((c for c in self._commanders if c.active), self._holder)
+            if commander is not self._commander:
+                commander.take_over(state)
+                self._commander = commander
+            sample, stop = commander.command(state, self.sim.control_dt)
+            tcp_position, tcp_orientation = self.sim.tcp_pose()
+            wrench = self.sim.wrench()
+            if getattr(commander, 'free', False):  # freedrive: the robot compensates gravity, the arm is free
+                tau = self.sim.advance_free(state)
+            else:
+                tau = self.sim.advance(state, sample, stop)
+            contacts = self.sim.physics.contacts()  # measured over this cycle's physics steps
+            if self._tool_contact.watching:
+                halted = self._tool_contact.detect(contacts, self.sim.time)
+                if halted is not None:  # the robot cancels the motion: the next cycle brakes
+                    commander.halt(self.sim.state().q, halted)
+            cause = self._safety_check(sample, contacts)
+            if cause is not None:
+                # Seen in this cycle's physics step: the arm is halted from the next cycle on.
+                self.robot.protective_stop(self.sim.time, cause)
+                self._controller_stopper()
+            robot_factor, total_factor = self.scaling.factor, self.scaling.total
+            self.host.check_waiters()
+        self.gateway.set_sim_time(self.sim.time)
+        cycle = Cycle(self._cycle, state.t, conv.time_parts(state.t), state, sample, tau, robot_factor,
+                      total_factor, tcp_position, tcp_orientation, wrench)
+        for component in self.components:
+            if component.active:
+                component.update(cycle)
+        self._publish(cycle)
+        if cause is not None:
+            self.get_logger().error(f'PROTECTIVE_STOP: {cause}')
+        self._cycle += 1
+
+    def _safety_check(self, sample, contacts) -> str | None:
+        """Under the lock, after the physics step: the cause of a protective stop, or None. The checks are armed
+        while the robot can move (RUNNING, NORMAL); see ``safety.py``."""
+        armed = self.robot.robot_mode == RUNNING and self.robot.safety_mode == NORMAL
+        cause = self.contact_safety.update(contacts, armed)
+        if cause is None and armed:
+            p = self.sim.params
+            cause = limit_cause(self.sim.physics.positions(), sample.positions, p.q_min, p.q_max, self.joints)
+        return cause
+
+    def _controller_stopper(self) -> None:
+        """Under the lock: when the robot can no longer move, the controllers that command it are deactivated (their
+        goals end and the robot holds), and activated again when it can, as the driver's controller_stopper does;
+        the gateway hears of every change."""
+        refusal = self.robot.motion_refusal()
+        if refusal == self._refusal:
+            return
+        self._refusal = refusal
+        self.gateway.send(Gate(refusal))
+        self.controller_manager.program_state_changed(refusal)
+
+    def _publish(self, cycle: Cycle) -> None:
+        self._clock_cdr.publish((), cycle.stamp_parts)
+
+    def shutdown(self) -> None:
+        """Stop the simulation loop and the controller's interface process, and wait for both."""
+        self._stop.set()
+        if self._thread.is_alive():
+            self._thread.join(timeout=5.0)
+        self.gateway.close()
+
+    def destroy_node(self) -> None:
+        for component in self.components:
+            component.destroy()
+        self.controller_manager.destroy()
+        super().destroy_node()
+
+
+def main(argv: list[str] | None = None) -> int:
+    """Entry point of `ur_sim` (and `ros2 run ur_sim_driver ur_sim`). Exits 0 on SIGINT/SIGTERM, 2 on bad parameters."""
+    # The simulation thread gives up the GIL in every MuJoCo and rcl call; with the default 5 ms switch
+    # interval each hand-back can stall it behind an executor thread, which caps the loop far below 500 Hz.
+    sys.setswitchinterval(GIL_SWITCH_INTERVAL)
+    # Our own signal handling: stop the simulation thread first, then shut the context down, so that no
+    # publish races the context's destruction.
+    rclpy.init(args=argv, signal_handler_options=SignalHandlerOptions.NO)
+    stop = threading.Event()
+    for sig in (signal.SIGINT, signal.SIGTERM):
+        signal.signal(sig, lambda *_: stop.set())
+    node = None
+    executor = MultiThreadedExecutor(num_threads=4)
+    spinner = None
+    code = 0
+    try:
+        node = UrSimNode()
+        for n in node.nodes():
+            executor.add_node(n)
+        # Everything built so far (models, nodes, messages) lives until exit: out of the collector's sight, its
+        # full collections take microseconds instead of milliseconds that the loop thread would wait out.
+        gc.freeze()
+        # The executor waits in a thread of its own, woken by work or once a second; this thread waits for the
+        # signal. (Waking every 0.1 s to look at `stop` rebuilt the wait set of some 150 entities each time: about
+        # 3 ms of interpreter time, which the loop thread shared.)
+        spinner = SpinThread(executor, 'ur_sim_executor').start()
+        while not stop.wait(0.5) and rclpy.ok() and spinner.running:
+            pass
+    except (KeyboardInterrupt, ExternalShutdownException):
+        pass
+    except UrSimError as exc:
+        print(f'ur_sim: {exc}', file=sys.stderr)
+        code = 2
+    finally:
+        if node is not None:
+            node.shutdown()
+        if spinner is not None:
+            spinner.stop(timeout=2.0)
+        else:
+            executor.shutdown(timeout_sec=2.0)
+        if node is not None:
+            node.destroy_node()
+        rclpy.try_shutdown()
+    return code
+
+
+if __name__ == '__main__':
+    sys.exit(main())

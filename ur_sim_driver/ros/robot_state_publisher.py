@@ -1,0 +1,94 @@
+"""robot_state_publisher: the robot's URDF and its frames on TF, as the ROS node of that name does.
+
+``/robot_description`` and ``/tf_static`` (the fixed joints) are published once, transient local; ``/tf``
+carries the six arm joints' transforms at ``publish_frequency`` [Hz] of simulated time, from the joint
+positions of the control cycle, stamped with its time. Frames and joints come from the same kinematic tree
+the URDF and the MuJoCo model are built from (``description/urdf.py``); every frame carries the tf_prefix.
+"""
+from __future__ import annotations
+
+import math
+
+import numpy as np
+from geometry_msgs.msg import TransformStamped
+from rclpy.node import Node
+from rclpy.qos import DurabilityPolicy, QoSProfile
+from std_msgs.msg import String
+from tf2_msgs.msg import TFMessage
+
+from ur_sim_driver.controllers.base import Component, Cycle, Host
+from ur_sim_driver.controllers.cdr_template import CdrTemplate
+from ur_sim_driver.description.params import matrix_to_quat
+from ur_sim_driver.description.tool import get_tool
+from ur_sim_driver.description.urdf import JointSpec, kinematic_tree
+from ur_sim_driver.motion import conversions as conv
+
+
+def _transform(joint: JointSpec) -> TransformStamped:
+    """The joint's transform at position 0: parent -> child = the joint origin."""
+    tf = TransformStamped()
+    tf.header.frame_id = joint.parent
+    tf.child_frame_id = joint.child
+    t = tf.transform.translation
+    t.x, t.y, t.z = (float(v) for v in joint.origin.xyz)
+    w, x, y, z = matrix_to_quat(joint.origin.matrix()[:3, :3])
+    r = tf.transform.rotation
+    r.x, r.y, r.z, r.w = float(x), float(y), float(z), float(w)
+    return tf
+
+
+class RobotStatePublisher(Component):
+    """/robot_description, /tf_static and /tf of the simulated arm (and its tool)."""
+
+    name = 'robot_state_publisher'
+    type_name = 'robot_state_publisher'  # a node of the driver's launch file, not a controller
+    is_controller = False
+
+    def on_configure(self, host: Host, node: Node) -> None:
+        sim, cfg = host.sim, host.cfg
+        latched = QoSProfile(depth=1, durability=DurabilityPolicy.TRANSIENT_LOCAL)
+        # Relative to the namespace, as upstream's; /tf and /tf_static are absolute, as tf2_ros's.
+        self._pub_description = node.create_publisher(String, cfg.prefixed('robot_description'), latched)
+        self._pub_static = node.create_publisher(TFMessage, '/tf_static', latched)
+        self._pub_tf = node.create_publisher(TFMessage, '/tf', 100)
+        self._period = 1.0 / cfg.publish_frequency
+        self._next = 0.0
+        # Simulated time is a sum of physics steps, a hair off the multiples of the period: half a control
+        # period of slack keeps the publishing on the cycle nearest each multiple.
+        self._slack = 0.5 * sim.control_dt
+
+        tree = kinematic_tree(sim.params, cfg.tf_prefix, get_tool(cfg.tool))
+        stamp = conv.sec_to_time(sim.time)
+        static = []
+        for joint in tree:
+            if joint.index is None:
+                tf = _transform(joint)
+                tf.header.stamp = stamp
+                static.append(tf)
+        moving = sorted((j for j in tree if j.index is not None), key=lambda j: j.index)
+        # Each moving transform is origin * Rz(q): its rotation is the origin's quaternion times
+        # (cos q/2, 0, 0, sin q/2); the translation does not depend on q.
+        # (w, x, y, z) of each origin, as columns (k,) for the vectorised product in update().
+        self._w, self._x, self._y, self._z = np.array([matrix_to_quat(j.origin.matrix()[:3, :3]) for j in moving]).T
+        self._index = np.array([j.index for j in moving], dtype=np.intp)
+        # Published as CDR bytes patched in place (cdr_template.py): the rotations and stamps change.
+        self._tf = CdrTemplate(
+            TFMessage(transforms=[_transform(j) for j in moving]),
+            stamps=tuple(f'transforms[{k}].header.stamp' for k in range(len(moving))),
+            floats=tuple(f'transforms[{k}].transform.rotation.{a}' for k in range(len(moving)) for a in 'xyzw'),
+            publisher=self._pub_tf)
+
+        self._pub_description.publish(String(data=sim.urdf))
+        self._pub_static.publish(TFMessage(transforms=static))
+
+    def update(self, cycle: Cycle) -> None:
+        t = cycle.t + self._slack
+        if t < self._next:
+            return
+        self._next = (math.floor(t / self._period) + 1) * self._period
+        half = 0.5 * cycle.state.q[self._index]
+        c, s = np.cos(half), np.sin(half)
+        w, x, y, z = self._w, self._x, self._y, self._z
+        rotations = np.stack((x * c + y * s, y * c - x * s, z * c + w * s, w * c - z * s), axis=1)  # (k, 4) xyzw
+        self._tf.publish(rotations.reshape(-1), cycle.stamp_parts)
+
