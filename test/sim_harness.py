@@ -283,6 +283,14 @@ class SimHarness:
             wait_still(lambda: self.sim.commands_received > before, what='the goal at its controller')
         return handle
 
+    def cancel(self, handle):
+        """Ask to cancel a goal of a trajectory controller and return the CancelGoal response, holding a lockstep
+        simulation still: ur_sim applies a cancel as it arrives from the gateway and only then answers it, so the
+        robot stops at the same simulated time however long the request and its answer travel."""
+        future = handle.cancel_goal_async()
+        wait_still(future.done, what='the cancel answer')
+        return future.result()
+
     def result(self, handle, timeout: float = TIMEOUT):
         """Wait for the result of an accepted goal: (status, error_code, error_string). In lockstep the simulation
         steps until it has ended the goal and is then held still while the result is delivered, so that the test

@@ -58,8 +58,7 @@ def test_storm_of_bursts_and_cancels_keeps_the_newest_goal_running():
                     assert results[goal_id] == (GoalStatus.STATUS_ABORTED, rc.INVALID_GOAL, PREEMPTED_BY_ACTION)
             previous_newest = (ids[-1], result_futures[-1])
             if rng.random() < 0.3:  # a random cancel of the running goal
-                cancel = newest.cancel_goal_async()
-                wait_for(cancel.done, what='the cancel response')
+                h.cancel(newest)
                 wait_for(result_futures[-1].done, what='the canceled result')
                 r = result_futures[-1].result()
                 results[ids[-1]] = (r.status, r.result.error_code, r.result.error_string)
@@ -69,7 +68,7 @@ def test_storm_of_bursts_and_cancels_keeps_the_newest_goal_running():
         last_id, last_future = previous_newest or (None, None)
         if last_future is not None:
             last = [hd for hd in handles if bytes(hd.goal_id.uuid) == last_id][0]
-            wait_for(last.cancel_goal_async().done, what='the last cancel')
+            h.cancel(last)
             wait_for(last_future.done, what='the last result')
             results[last_id] = (last_future.result().status, 0, '')
         assert len(results) == GOALS

@@ -10,7 +10,7 @@ from action_msgs.msg import GoalStatus
 from cm_helpers import BEST_EFFORT, ControllerManagerClient
 from control_msgs.action import FollowJointTrajectory
 from rclpy.callback_groups import ReentrantCallbackGroup
-from sim_harness import point, ready_action, running_sim, wait_for
+from sim_harness import point, ready_action, running_sim
 
 from ur_glue_planner.execution.action_client import ActionClient
 from ur_sim_driver.motion import result_codes as rc
@@ -38,11 +38,8 @@ def send(h, client, goal):
     return h.send(goal, client=client)
 
 
-def result(handle, timeout: float = 60.0):
-    future = handle.get_result_async()
-    wait_for(future.done, timeout, 'the goal result')
-    r = future.result()
-    return r.status, r.result.error_code, r.result.error_string
+def result(h, handle):
+    return h.result(handle, timeout=60.0)
 
 
 def goal(h, velocities=False, accelerations=False, position_tol=None, velocity_tol=0.0, goal_time=0.0,
@@ -72,7 +69,7 @@ def test_passthrough_trajectory(rig):
     rec = h.record()
     handle = send(h, client, goal(h, position_tol=0.01, goal_time=1.0))
     assert handle.accepted
-    status, code, text = result(handle)
+    status, code, text = result(h, handle)
     h.stop_recording()
     assert (status, code) == (GoalStatus.STATUS_SUCCEEDED, rc.SUCCESSFUL), text
     assert 'Trajectory executed successfully in' in text
@@ -91,7 +88,7 @@ def test_quintic_trajectory(rig):
     handle = send(h, client, goal(h, velocities=True, accelerations=True, position_tol=0.01, velocity_tol=0.01,
                                goal_time=1.0))
     assert handle.accepted
-    status, code, text = result(handle)
+    status, code, text = result(h, handle)
     assert (status, code) == (GoalStatus.STATUS_SUCCEEDED, rc.SUCCESSFUL), text
 
 
@@ -100,7 +97,7 @@ def test_impossible_goal_tolerance_fails(rig):
     activate(cm)
     handle = send(h, client, goal(h, position_tol=1e-9, goal_time=1.0))
     assert handle.accepted
-    status, code, text = result(handle)
+    status, code, text = result(h, handle)
     assert (status, code, text) == (GoalStatus.STATUS_ABORTED, rc.GOAL_TOLERANCE_VIOLATED,
                                     'Robot not within tolerances at end of trajectory.')
 
@@ -110,7 +107,7 @@ def test_impossible_goal_time_tolerance_fails(rig):
     activate(cm)
     handle = send(h, client, goal(h, position_tol=0.01, goal_time=1e-8))
     assert handle.accepted
-    status, code, text = result(handle)
+    status, code, text = result(h, handle)
     assert (status, code) == (GoalStatus.STATUS_ABORTED, rc.GOAL_TOLERANCE_VIOLATED)
     assert text.startswith('Goal not reached within time tolerance. Missed goal time by ')
 
@@ -126,9 +123,8 @@ def test_rules_busy_partial_and_cancel(rig):
     assert first.accepted
     assert not send(h, client, goal(h)).accepted  # no preemption: a trajectory is executing
     h.wait_sim_time(2.0)
-    future = first.cancel_goal_async()
-    wait_for(future.done, what='the cancel answer')
-    status, _, _ = result(first)
+    h.cancel(first)
+    status, _, _ = result(h, first)
     assert status == GoalStatus.STATUS_CANCELED
     # The robot stops where it was.
     h.wait_sim_time(0.5)

@@ -164,14 +164,10 @@ def test_a_passthrough_trajectory_is_aborted_by_the_robot(scene):
     ready_action(client)
     contact_goal = tc.send()
     assert contact_goal.accepted
-    future = client.send_goal_async(goal_of(h, seg))
-    wait_for(future.done, what='the passthrough goal response')
-    handle = future.result()
+    handle = h.send(goal_of(h, seg), client=client)
     assert handle.accepted
-    result = handle.get_result_async()
-    wait_for(result.done, what='the passthrough result')
     # Upstream's "aborted by hardware": status aborted, the result left empty.
-    assert (result.result().status, result.result().result.error_code) == (GoalStatus.STATUS_ABORTED, 0)
+    assert h.result(handle)[:2] == (GoalStatus.STATUS_ABORTED, 0)
     assert tc.status(contact_goal) == GoalStatus.STATUS_SUCCEEDED
     assert h.sim.robot.safety_mode == NORMAL
     assert cm.switch(activate=['scaled_joint_trajectory_controller'], deactivate=[passthrough]).ok

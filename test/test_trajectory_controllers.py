@@ -36,9 +36,7 @@ def robot():
 
 
 def _run(h, name, goal):
-    future = h.actions[name].send_goal_async(goal)
-    wait_for(future.done, what='the goal response')
-    handle = future.result()
+    handle = h.send(goal, client=h.actions[name])
     assert handle.accepted
     return handle
 
