@@ -122,7 +122,7 @@ def test_rules_busy_partial_and_cancel(rig):
     first = send(h, client, goal(h))
     assert first.accepted
     assert not send(h, client, goal(h)).accepted  # no preemption: a trajectory is executing
-    h.wait_sim_time(2.0)
+    h.wait_sim_time(6.0)  # the goal holds HOME until 4 s, then heads for its second waypoint
     h.cancel(first)
     status, _, _ = result(h, first)
     assert status == GoalStatus.STATUS_CANCELED
