@@ -203,7 +203,8 @@ def test_run_on_ur_sim_succeeds_with_the_robot_live_in_the_page(studio, page, si
 def test_stop_cancels_the_running_goal(studio, page, sim):
     _tab(page, 'Run')
     page.get_by_role('button', name='Run', exact=True).click()
-    wait_until(lambda: studio.run_progress[0] is not None, 'the first feedback')
+    # The run before this one left its result and progress: the click has arrived once the result is cleared.
+    wait_until(lambda: studio.run_result is None and studio.run_progress[0] is not None, 'the first feedback')
     page.get_by_role('button', name='Stop', exact=True).click()
     wait_until(lambda: studio.run_result is not None, 'the run to end', timeout=60)
     assert not studio.run_result.succeeded and studio.run_result.message.startswith('stopped')
