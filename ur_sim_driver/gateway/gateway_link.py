@@ -210,6 +210,12 @@ class GatewayLink:
             self.ended.append(message.token)
         self._outbox.put(message)
 
+    @property
+    def settled(self) -> bool:
+        """True once the gateway has applied every activation sent to it (a goal sent now meets those states)."""
+        with self._acks_lock:
+            return not self._acks
+
     def activation(self, controller: str, active: bool) -> threading.Event:
         """Tell the gateway that `controller` was switched; the event is set once it has applied that."""
         event = threading.Event()
