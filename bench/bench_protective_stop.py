@@ -16,9 +16,9 @@ from rclpy.parameter import Parameter
 
 from ur_glue_planner.job import default_job_path, load_job
 from ur_glue_planner.motion.approach import JointSegment, joint_move
-from ur_glue_planner.motion.kinematics import ur_kinematics
 from ur_glue_planner.motion.plan import plan_job
 from ur_glue_planner.motion.touch import touch_move
+from ur_glue_planner.motion.ur_arm_kinematics import ur_kinematics
 from ur_glue_planner.scene.waypoints import tool_axis
 from ur_sim_driver.motion.trajectory_types import TrajectoryPoints
 from ur_sim_driver.robot.robot_state import PROTECTIVE_STOP

@@ -30,7 +30,7 @@ from ur_glue_planner.execution.action_client import ActionClient
 from ur_sim_driver.robot.io_bank import SPAN
 from ur_sim_driver.robot.robot_state import PROTECTIVE_STOP, RUNNING
 from ur_sim_driver.ros.node import UrSimNode
-from ur_sim_driver.ros.spin_thread import SpinThread
+from ur_sim_driver.spin_thread import SpinThread
 
 POSE_TOLERANCE = 1e-3  # [rad] a joint further than this from the remembered pose is moved back after a test
 SETTLED_SPEED = 1e-3  # [rad/s] every joint slower than this: the arm is back at rest

@@ -7,7 +7,7 @@ import pytest
 
 from ur_glue_planner.errors import PlanningError
 from ur_glue_planner.motion.approach import DEFAULT_JERK_FACTOR, joint_move, offset_pose, tool_axis_move
-from ur_glue_planner.motion.kinematics import ur_kinematics
+from ur_glue_planner.motion.ur_arm_kinematics import ur_kinematics
 from ur_glue_planner.orientation import rotation_angle
 
 DT = 0.02

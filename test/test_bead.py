@@ -9,7 +9,7 @@ import pytest
 from builtin_interfaces.msg import Time
 from sensor_msgs.msg import PointField
 
-from ur_sim_driver.robot.bead import BASE_IN_WORLD, CLOUD_DTYPE, Bead, draw_bead, from_cloud, to_cloud
+from ur_sim_driver.description.bead import BASE_IN_WORLD, CLOUD_DTYPE, Bead, draw_bead, from_cloud, to_cloud
 
 RGBA = (1.0, 0.0, 1.0, 1.0)  # magenta: no other geom of the test scene has it
 

@@ -14,9 +14,9 @@ import numpy as np
 import pytest
 
 from ur_glue_planner.job import default_job_path, load_job
-from ur_glue_planner.motion.kinematics import ur_kinematics
 from ur_glue_planner.motion.plan import plan_job
 from ur_glue_planner.motion.touch import touch_move
+from ur_glue_planner.motion.ur_arm_kinematics import ur_kinematics
 from ur_glue_planner.scene.waypoints import tool_axis
 from ur_sim_driver.robot.sim_config import SimConfig
 from ur_sim_driver.robot.simulator import Simulator

@@ -6,16 +6,9 @@ import math
 import numpy as np
 import pytest
 
+from ur_sim_driver.description.bead import ASPECT, section
 from ur_sim_driver.errors import ConfigError
-from ur_sim_driver.robot.dispenser import (
-    ASPECT,
-    POINT_SPACING,
-    BeadTrack,
-    DispenserParams,
-    FlowState,
-    flow_step,
-    section,
-)
+from ur_sim_driver.robot.dispenser import POINT_SPACING, BeadTrack, DispenserParams, FlowState, flow_step
 
 DT = 0.002  # [s] e-series control period
 STEADY = DispenserParams(on_delay=0.0, off_delay=0.0, time_constant=0.0)  # flow = rate while on

@@ -14,11 +14,11 @@ from test_io_and_status import IO, Latest, call, client_for
 from ur_msgs.msg import IOStates
 from ur_msgs.srv import SetIO
 
-from ur_glue_planner.motion.kinematics import ur_kinematics
+from ur_glue_planner.motion.ur_arm_kinematics import ur_kinematics
 from ur_glue_planner.orientation import rotation_from_zyx_euler
 from ur_glue_planner.scene.windshield import DEFAULT_WINDSHIELD
-from ur_sim_driver.robot.bead import BASE_IN_WORLD, draw_bead, from_cloud
-from ur_sim_driver.robot.dispenser import IDLE_FLOW, DispenserParams, section
+from ur_sim_driver.description.bead import BASE_IN_WORLD, draw_bead, from_cloud, section
+from ur_sim_driver.robot.dispenser import IDLE_FLOW, DispenserParams
 
 HOME = np.array([0.0, -math.pi / 2, 0.0, -math.pi / 2, 0.0, 0.0])
 TIP_R = rotation_from_zyx_euler(0.0, 0.0, -math.pi / 3)  # seed 1's tip orientation

@@ -10,7 +10,8 @@ import pytest
 from ur_glue_planner.defaults import DEFAULT_ORIENTATION_ZYX, DEFAULT_WAYPOINTS
 from ur_glue_planner.errors import PlanningError
 from ur_glue_planner.motion.ik_branch import _near, choose_branch, follow, start_branches
-from ur_glue_planner.motion.kinematics import Kinematics, ur_kinematics
+from ur_glue_planner.motion.kinematics import Kinematics
+from ur_glue_planner.motion.ur_arm_kinematics import ur_kinematics
 from ur_glue_planner.orientation import rotation_angle, rotation_from_zyx_euler
 from ur_glue_planner.path.glue_path import build_glue_path
 from ur_sim_driver.description.params import joint_names, load_ur_params

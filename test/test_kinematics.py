@@ -7,7 +7,8 @@ import math
 import numpy as np
 import pytest
 
-from ur_glue_planner.motion.kinematics import Kinematics, pose_errors, ur_kinematics
+from ur_glue_planner.motion.kinematics import Kinematics, pose_errors
+from ur_glue_planner.motion.ur_arm_kinematics import ur_kinematics
 from ur_glue_planner.orientation import rot_x, rot_z, rotation_angle, rotation_from_zyx_euler
 from ur_sim_driver.description.params import joint_names, load_ur_params
 from ur_sim_driver.description.urdf import build_urdf

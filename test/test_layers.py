@@ -1,4 +1,6 @@
-"""The tree shows the layers: every import of ur_sim_driver by ur_sim_driver goes to the same layer or one below.
+"""The tree shows the layers: every import of ur_sim_driver by ur_sim_driver goes to the same layer or one below;
+ur_glue_planner stands on the shared ground only (the description and the top modules), never on the simulator's
+runtime; and neither package has an import cycle.
 
 Read from the source with ``ast`` (every import statement, also inside functions and ``if TYPE_CHECKING``), so a
 lazy import cannot hide an upward dependency. The order is the one ``ur_sim_driver/__init__.py`` documents.
@@ -8,15 +10,18 @@ from pathlib import Path
 
 import pytest
 
+import ur_glue_planner
 import ur_sim_driver
 
 ORDER = ('description', 'physics', 'robot', 'motion', 'gateway', 'controllers', 'ros')  # lowest first
-BASE = ('errors', 'paths')  # the modules at the top: importable by all, importing nothing of ours
+BASE = ('errors', 'paths', 'spin_thread')  # the modules at the top: importable by all, importing nothing of ours
+SHARED = ('description',)  # the layers ur_glue_planner may import, besides BASE
 ROOT = Path(ur_sim_driver.__file__).parent
+PLANNER = Path(ur_glue_planner.__file__).parent
 
 
-def _modules() -> list[Path]:
-    return sorted(p for p in ROOT.rglob('*.py') if '__pycache__' not in p.parts)
+def _modules(root: Path = ROOT) -> list[Path]:
+    return sorted(p for p in root.rglob('*.py') if '__pycache__' not in p.parts)
 
 
 def _layer(module: str) -> int:
@@ -29,14 +34,14 @@ def _layer(module: str) -> int:
     return ORDER.index(first)
 
 
-def _imports(path: Path) -> list[tuple[int, str]]:
-    """(line, module) of each ur_sim_driver module imported by the file at `path`."""
+def _imports(path: Path, package: str = 'ur_sim_driver') -> list[tuple[int, str]]:
+    """(line, module) of each module of `package` imported by the file at `path`."""
     found = []
     for node in ast.walk(ast.parse(path.read_text(), str(path))):
         if isinstance(node, ast.Import):
-            found += [(node.lineno, a.name) for a in node.names if a.name.startswith('ur_sim_driver.')]
-        elif isinstance(node, ast.ImportFrom) and node.level == 0 and (node.module or '').startswith('ur_sim_driver'):
-            if node.module == 'ur_sim_driver' or node.module.count('.') == 1:  # from ur_sim_driver[.layer] import x
+            found += [(node.lineno, a.name) for a in node.names if a.name.startswith(package + '.')]
+        elif isinstance(node, ast.ImportFrom) and node.level == 0 and (node.module or '').startswith(package):
+            if node.module == package or node.module.count('.') == 1:  # from package[.sub] import x
                 found += [(node.lineno, f'{node.module}.{a.name}') for a in node.names]
             else:
                 found.append((node.lineno, node.module))
@@ -72,3 +77,45 @@ def test_every_layer_says_what_lives_there_and_what_it_may_import():
             assert other in said, f'{layer}: its docstring does not say that it may import {other}'
         for other in ORDER[ORDER.index(layer) + 1:]:
             assert other not in said, f'{layer}: its docstring names {other}, a layer above it, as importable'
+
+
+@pytest.mark.parametrize('path', _modules(PLANNER), ids=lambda p: str(p.relative_to(PLANNER)))
+def test_the_planner_imports_only_the_shared_ground(path):
+    for line, module in _imports(path):
+        first = module.split('.')[1]
+        assert first in BASE + SHARED, (f'ur_glue_planner/{path.relative_to(PLANNER)}:{line} imports {module}, '
+                                        f"the simulator's runtime; it may import ur_sim_driver's "
+                                        f'{", ".join(SHARED)} and {", ".join(BASE)}')
+
+
+def _module_name(path: Path, root: Path) -> str:
+    parts = path.relative_to(root.parent).with_suffix('').parts
+    return '.'.join(parts[:-1] if parts[-1] == '__init__' else parts)
+
+
+@pytest.mark.parametrize('root', (ROOT, PLANNER), ids=lambda r: r.name)
+def test_no_import_cycle(root):
+    names = {_module_name(p, root): p for p in _modules(root)}
+    graph = {}
+    for name, path in names.items():
+        targets = set()
+        for _, module in _imports(path, root.name):
+            # `from pkg.sub import name` names a module or something in pkg.sub: take the longest module that exists
+            while module not in names and '.' in module:
+                module = module.rsplit('.', 1)[0]
+            if module != name and module in names and not names[module].name == '__init__.py':
+                targets.add(module)
+        graph[name] = targets
+    done: set[str] = set()
+
+    def visit(name: str, trail: list[str]) -> None:
+        if name in trail:
+            raise AssertionError(f'import cycle: {" -> ".join(trail[trail.index(name):] + [name])}')
+        if name in done:
+            return
+        for target in sorted(graph[name]):
+            visit(target, trail + [name])
+        done.add(name)
+
+    for name in sorted(graph):
+        visit(name, [])

@@ -9,9 +9,9 @@ from sim_harness import running_sim, wait_for
 from ur_glue_planner.execution.ros_conversions import joint_trajectory
 from ur_glue_planner.job import default_job_path, load_job
 from ur_glue_planner.motion.approach import joint_move
-from ur_glue_planner.motion.kinematics import ur_kinematics
 from ur_glue_planner.motion.plan import plan_job
 from ur_glue_planner.motion.touch import touch_move
+from ur_glue_planner.motion.ur_arm_kinematics import ur_kinematics
 from ur_glue_planner.scene.waypoints import tool_axis
 from ur_sim_driver.description.params import load_ur_params
 from ur_sim_driver.motion import result_codes as rc

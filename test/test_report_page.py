@@ -18,7 +18,9 @@ from ur_glue_planner.report.bead_metrics import bead_quality  # noqa: E402
 from ur_glue_planner.report.html_page import write_index  # noqa: E402
 from ur_glue_planner.report.video import render_video  # noqa: E402
 from ur_glue_planner.scene.windshield import DEFAULT_WINDSHIELD  # noqa: E402
+from ur_sim_driver.description.params import load_ur_params  # noqa: E402
 from ur_sim_driver.description.scene import config_dir, pose_matrix  # noqa: E402
+from ur_sim_driver.description.tool import get_tool  # noqa: E402
 
 HOME = np.radians([0.0, -90.0, 0.0, -90.0, 0.0, 0.0])
 
@@ -35,8 +37,9 @@ def report_dir(tmp_path_factory):
     mesh = config_dir().parent / 'meshes' / 'windshield.stl'
     frames = []
     scene = [('windshield', mesh, pose_matrix((0, 0.4, 0.15), (-0.9599, 0, 0)))]
-    info = render_video('ur5', 'dispenser', scene, t, q, out / 'run.mp4', bead=bead, bead_t0=100.0, width=320,
-                        height=240, progress=lambda done, total, _: frames.append((done, total)))
+    arm, tool = load_ur_params('ur5'), get_tool('dispenser')
+    info = render_video(arm, tool, scene, t, q, out / 'run.mp4', bead=bead, bead_t0=100.0, width=320, height=240,
+                        progress=lambda done, total, _: frames.append((done, total)))
     fig, ax = plt.subplots()
     ax.plot(s, s)
     fig.savefig(out / 'figure.png')
@@ -60,7 +63,8 @@ def test_video_is_h264_at_30_fps_with_every_frame(report_dir):
     with_bead = [np.frombuffer(f, np.uint8).reshape(240, 320, 3).astype(int) for f in reader]
     assert np.abs(with_bead[0] - with_bead[-1]).mean() > 0.2  # the arm moved
     # the same run without the bead: the frames differ only where the bead has grown
-    render_video('ur5', 'dispenser', scene, t, q, out / 'no_bead.mp4', width=320, height=240, progress=None)
+    render_video(load_ur_params('ur5'), get_tool('dispenser'), scene, t, q, out / 'no_bead.mp4', width=320,
+                 height=240, progress=None)
     reader = imageio_ffmpeg.read_frames(str(out / 'no_bead.mp4'))
     next(reader)
     without = [np.frombuffer(f, np.uint8).reshape(240, 320, 3).astype(int) for f in reader]

@@ -10,7 +10,7 @@ from std_srvs.srv import Trigger
 
 from ur_glue_planner.errors import ClientError
 from ur_glue_planner.execution.service_call import call_idempotent
-from ur_sim_driver.ros.spin_thread import SpinThread
+from ur_sim_driver.spin_thread import SpinThread
 
 
 def test_the_first_answer_is_returned_and_unanswered_requests_are_sent_again():

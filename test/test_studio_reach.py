@@ -3,10 +3,12 @@ import numpy as np
 import pytest
 
 from ur_glue_planner.job import load_job
-from ur_glue_planner.motion.kinematics import ur_kinematics
+from ur_glue_planner.motion.ur_arm_kinematics import ur_kinematics
 from ur_glue_planner.studio.reach import GlassCollision, Reach, waypoint_pose
 from ur_glue_planner.studio.scene_assets import glass_pieces
 from ur_glue_planner.studio.teaching import TeachState
+from ur_sim_driver.description.params import load_ur_params
+from ur_sim_driver.description.tool import get_tool
 from ur_sim_driver.paths import config_dir
 
 HOME = np.radians([0.0, -90.0, 0.0, -90.0, 0.0, 0.0])
@@ -16,7 +18,7 @@ HOME = np.radians([0.0, -90.0, 0.0, -90.0, 0.0, 0.0])
 def reach():
     job = load_job(config_dir() / 'glue_job.yaml')
     kin = ur_kinematics('ur5', 'dispenser')
-    return Reach(kin, GlassCollision('ur5', 'dispenser', glass_pieces(job.windshield)))
+    return Reach(kin, GlassCollision(load_ur_params('ur5'), get_tool('dispenser'), glass_pieces(job.windshield)))
 
 
 def test_seed_waypoints_are_reachable_and_the_solution_puts_the_tip_there(reach):

@@ -1,7 +1,7 @@
 """The robot drawn in the page: link shapes and link poses from a URDF."""
 import numpy as np
 
-from ur_glue_planner.motion.kinematics import ur_kinematics
+from ur_glue_planner.motion.ur_arm_kinematics import ur_kinematics
 from ur_glue_planner.studio.robot_geometry import RobotModel, shapes_for, ur_shapes, urdf_shapes
 from ur_sim_driver.description.params import joint_names, load_ur_params
 from ur_sim_driver.description.tool import get_tool
@@ -9,9 +9,9 @@ from ur_sim_driver.description.urdf import build_urdf
 
 
 def test_ur_shapes_cover_the_arm_and_the_tool():
-    links = {s.link for s in ur_shapes('ur5', 'dispenser')}
+    links = {s.link for s in ur_shapes(load_ur_params('ur5'), get_tool('dispenser'))}
     assert {'shoulder_link', 'upper_arm_link', 'forearm_link', 'wrist_3_link', 'dispenser', 'dispenser_tip'} <= links
-    assert 'dispenser' not in {s.link for s in ur_shapes('ur5', None)}
+    assert 'dispenser' not in {s.link for s in ur_shapes(load_ur_params('ur5'), None)}
 
 
 def test_link_poses_agree_with_the_planner_kinematics():

@@ -6,8 +6,8 @@ import numpy as np
 import pytest
 
 from ur_glue_planner.defaults import DEFAULT_ORIENTATION_ZYX, DEFAULT_WAYPOINTS
-from ur_glue_planner.motion.kinematics import Kinematics, ur_kinematics
-from ur_glue_planner.motion.ur_arm_kinematics import NotOnFlangeError, UrKinematics
+from ur_glue_planner.motion.kinematics import Kinematics
+from ur_glue_planner.motion.ur_arm_kinematics import NotOnFlangeError, UrKinematics, ur_kinematics
 from ur_glue_planner.orientation import rotation_from_zyx_euler
 from ur_glue_planner.path.glue_path import build_glue_path
 from ur_sim_driver.description.params import DH, joint_names, load_ur_params

@@ -1,7 +1,7 @@
 """ur_sim_driver: a MuJoCo simulation of a Universal Robots arm behind the UR ROS 2 driver interfaces.
 
 Layers, each a subpackage; a module imports only from its own layer, the layers below it, and the modules at the
-top (``errors``, ``paths``), which import nothing of ours (``test/test_layers.py`` checks it):
+top (``errors``, ``paths``, ``spin_thread``), which import nothing of ours (``test/test_layers.py`` checks it):
 
     ros          the ur_sim node, the dashboard services, robot_state_publisher, IO and wrench components
     controllers  the driver's ros2_control controllers, one module each, and the controller manager
@@ -9,5 +9,8 @@ top (``errors``, ``paths``), which import nothing of ours (``test/test_layers.py
     motion       trajectories, their sampling, tolerances and validation, the trajectory controller core
     robot        the simulated robot: its state, safety, dashboard, IO, payload, speed scaling, glue gun
     physics      MuJoCo stepping, contacts and sensors, the joint servo and torque control
-    description  URDF and MJCF from UR parameters, the tool and the scene
+    description  URDF and MJCF from UR parameters, the tool, the scene and the glue bead's shape and message
+
+ur_glue_planner stands on the shared ground only: ``description`` and the top modules, never the simulator's
+runtime (the planner must drive a real robot just as well).
 """

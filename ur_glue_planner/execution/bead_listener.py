@@ -3,7 +3,7 @@
 Simulation only: a real UR driver has neither, and the planner then reports no bead (``available`` is False).
 The cloud holds the whole bead so far (transient local): per deposit point x, y, z, width, height (float32, m)
 and t (float64, simulated seconds), in the robot's ``base`` frame, which the planner's world (``base_link``,
-the robot at the origin) sees rotated by pi about z. The message format is ``ur_sim_driver.robot.bead``'s (a
+the robot at the origin) sees rotated by pi about z. The message format is ``ur_sim_driver.description.bead``'s (a
 message helper, not the simulator).
 """
 from __future__ import annotations
@@ -18,7 +18,7 @@ from std_srvs.srv import Trigger
 
 from ur_glue_planner.errors import ClientError
 from ur_glue_planner.execution.service_call import call_idempotent
-from ur_sim_driver.robot.bead import BASE_IN_WORLD, from_cloud
+from ur_sim_driver.description.bead import BASE_IN_WORLD, from_cloud
 
 BEAD_TOPIC = '/ur_sim/glue_bead'
 CLEAR_SERVICE = '/ur_sim/clear_glue_bead'
@@ -41,7 +41,8 @@ class BeadPoints:
 
 
 def bead_from_cloud(msg: PointCloud2) -> BeadPoints:
-    """Read the bead cloud (ur_sim_driver.robot.bead's format) in time order, turned from ``base`` to ``base_link``."""
+    """Read the bead cloud (``ur_sim_driver.description.bead``'s format) in time order, turned from ``base`` to
+    ``base_link``."""
     bead = from_cloud(msg)
     pts = np.asarray(bead.points, dtype=float) @ BASE_IN_WORLD[:3, :3].T
     order = np.argsort(bead.times, kind='stable')

@@ -36,7 +36,7 @@ from ur_glue_planner.errors import ClientError
 from ur_glue_planner.execution import ros_conversions as conv
 from ur_glue_planner.execution.action_client import ActionClient
 from ur_glue_planner.motion.kinematics import IkResult, Kinematics
-from ur_sim_driver.ros.spin_thread import SpinThread
+from ur_sim_driver.spin_thread import SpinThread
 
 DEFAULT_CONTROLLER = 'scaled_joint_trajectory_controller'
 IDLE_PACE = 0.002  # [s] rest of the client's spinning thread after a callback while nothing runs or records

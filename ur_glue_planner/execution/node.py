@@ -148,7 +148,7 @@ def finish_report(results: list, out_dir: Path, video: bool = True) -> dict:
     movie = None
     if video and run is not None and run.whole is not None and len(run.whole.t) > 1:
         print('rendering the video (MuJoCo off-screen, 30 fps of robot time):', flush=True)
-        info = render_video(plan.job.ur_type, plan.job.tool, scene_meshes(plan), run.whole.t, run.whole.q,
+        info = render_video(plan.robot, plan.tool, scene_meshes(plan), run.whole.t, run.whole.q,
                             out_dir / 'run.mp4', bead=run.deposit, bead_t0=run.whole_t0)
         summary['video'] = {'file': 'run.mp4', **info}
         print(f"video: {info['frames']} frames, {info['duration_s']:.1f} s, rendered in "

@@ -9,7 +9,6 @@ the velocity of the frame's origin and its angular velocity, both in world axes.
 
 from __future__ import annotations
 
-import functools
 from collections.abc import Sequence
 from dataclasses import dataclass
 
@@ -344,42 +343,3 @@ class Kinematics:
             if not res.converged:
                 return PathIk(q, res_p, res_r, iters, k)
         return PathIk(q, res_p, res_r, iters, None)
-
-
-def ur_kinematics(ur_type: str, tool: str | None = "dispenser", frame: str | None = None,
-                  base_pose: np.ndarray | None = None, tf_prefix: str = "") -> Kinematics:
-    """Kinematics of a UR arm from ``ur_sim_driver``'s description (no simulator import).
-
-    A frame fixed to the flange (tool0, a tool tip, ...) gets a :class:`UrKinematics`, whose
-    path IK uses the closed-form UR solution; any other frame a plain :class:`Kinematics`.
-
-    Args:
-        ur_type: 'ur5', 'ur5e', 'ur10' or 'ur10e'.
-        tool: Tool on tool0 ('dispenser' or None/'none').
-        frame: Frame to compute; default: the tool tip, or 'tool0' without a tool.
-        base_pose: World pose (4, 4) of base_link; identity (robot at the world origin) if None.
-        tf_prefix: Prefix of every frame and joint name.
-    """
-    from ur_glue_planner.motion.ur_arm_kinematics import NotOnFlangeError, UrKinematics
-    from ur_sim_driver.description.params import joint_names, load_ur_params
-    from ur_sim_driver.description.tool import get_tool
-
-    tool_def = get_tool(tool)
-    if frame is None:
-        frame = tool_def.tip_name if tool_def is not None else "tool0"
-    params = load_ur_params(ur_type)
-    urdf = _ur_urdf(params.name, tool_def.name if tool_def is not None else None, tf_prefix)
-    try:
-        return UrKinematics(urdf, joint_names(tf_prefix), tf_prefix + frame, params.dh, base_pose, tf_prefix + "tool0")
-    except NotOnFlangeError:
-        return Kinematics(urdf, joint_names(tf_prefix), tf_prefix + frame, base_pose=base_pose)
-
-
-@functools.lru_cache(maxsize=32)
-def _ur_urdf(ur_type: str, tool: str | None, tf_prefix: str) -> str:
-    """The URDF string of a UR type with a tool (built once per process: it is pure and immutable)."""
-    from ur_sim_driver.description.params import load_ur_params
-    from ur_sim_driver.description.tool import get_tool
-    from ur_sim_driver.description.urdf import build_urdf
-
-    return build_urdf(load_ur_params(ur_type), tf_prefix=tf_prefix, tool=get_tool(tool))

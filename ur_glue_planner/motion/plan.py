@@ -22,14 +22,16 @@ from ur_glue_planner.motion.approach import JointSegment, joint_move, tool_axis_
 from ur_glue_planner.motion.dispense import DispenseSchedule, run_up_length, schedule_dispenser
 from ur_glue_planner.motion.ik_branch import Branch, choose_branch
 from ur_glue_planner.motion.joint_trajectory import JointPlan, build_joint_plan
-from ur_glue_planner.motion.kinematics import Kinematics, ur_kinematics
+from ur_glue_planner.motion.kinematics import Kinematics
 from ur_glue_planner.motion.seed1 import seed1_bead
+from ur_glue_planner.motion.ur_arm_kinematics import ur_kinematics
 from ur_glue_planner.path.glue_path import GluePath, build_glue_path
 from ur_glue_planner.path.run_up import RunUpPath
 from ur_glue_planner.path.surface_path import SurfacePath
 from ur_glue_planner.path.timing import PathTiming, time_path
 from ur_glue_planner.scene.waypoints import job_waypoints, tool_axis, windshield_model
-from ur_sim_driver.description.params import load_ur_params
+from ur_sim_driver.description.params import URParams, load_ur_params
+from ur_sim_driver.description.tool import ToolDef, get_tool
 
 
 @dataclass(frozen=True)
@@ -90,6 +92,7 @@ class GluePlan:
         dispense: When the glue gun is switched (bead segment time).
         line: The intended bead centre line (P, 3) [m], about 1 mm apart: the rounded path on the glass (the
             tip stands off above it along the nozzle axis), or for seed 1 the waypoint polyline it walks.
+        robot, tool: The arm's parameters and its tool, resolved once from the job's names.
         method: 'constant_speed' (ours) or 'seed1'.
     """
 
@@ -109,6 +112,8 @@ class GluePlan:
     dispense: DispenseSchedule
     line: np.ndarray
     motion_path: GluePath | RunUpPath
+    robot: URParams
+    tool: ToolDef | None
     run_up: float = 0.0
     method: str = "constant_speed"
 
@@ -156,15 +161,16 @@ def plan_job(job: GlueJob, q_current: np.ndarray, qd_current: np.ndarray | None 
         PlanningError: Any stage fails (the message names the stage, sample and joint).
     """
     t0 = time.perf_counter()
-    params = load_ur_params(job.ur_type)
-    kin = ur_kinematics(job.ur_type, job.tool)
-    points, rots = job_waypoints(job)
+    params, tool = load_ur_params(job.ur_type), get_tool(job.tool)  # the job's names, resolved once
+    kin = ur_kinematics(params, tool)
+    axis = tool_axis(tool)
+    points, rots = job_waypoints(job, axis)
     path = build_glue_path(points, rots, max_deviation=job.path.corner_max_deviation, closed=job.path.closed)
     seed1 = job.method == "seed1"
     bead_path = path
     if job.path.follow_surface and not seed1:
         bead_path = SurfacePath(path, windshield_model(job.windshield), job.standoff,
-                                tuple(float(x) for x in tool_axis(job.tool)))
+                                tuple(float(x) for x in axis))
     motion_path, run_up = bead_path, 0.0
     if path.closed and job.dispenser.flying_start and not seed1:
         run_up = run_up_length(job.dispenser, job.tcp_speed, job.ramp_time)
@@ -190,7 +196,6 @@ def plan_job(job: GlueJob, q_current: np.ndarray, qd_current: np.ndarray | None 
     dispense = schedule_dispenser(job.dispenser, bead.times, bead.s, bead.tcp_speed, run_up,
                                   bead.s[-1] if seed1 else run_up + path.length, job.tcp_speed)
 
-    axis = tool_axis(job.tool)
     start_pose, end_pose = kin.fk(bead.q[0]), kin.fk(bead.q[-1])
     descent = retreat = None
     goal = bead.q[0]
@@ -228,6 +233,6 @@ def plan_job(job: GlueJob, q_current: np.ndarray, qd_current: np.ndarray | None 
     return GluePlan(job=job, kinematics=kin, waypoints=points, orientations=rots, path=path, nominal_timing=nominal,
                     branch=branch, branches=branches, bead=bead, approach=approach, descent=descent,
                     retreat=retreat, summary=summary, dispense=dispense, line=line, motion_path=motion_path,
-                    run_up=run_up, method=job.method)
+                    robot=params, tool=tool, run_up=run_up, method=job.method)
 
 

@@ -18,7 +18,9 @@ import pinocchio as pin
 
 from ur_glue_planner.motion.analytic_ik import UrAnalyticIK, follow_branch, nearest_branch
 from ur_glue_planner.motion.kinematics import Kinematics, PathIk, pose_errors
-from ur_sim_driver.description.params import DH
+from ur_sim_driver.description.params import DH, URParams, joint_names, load_ur_params
+from ur_sim_driver.description.tool import ToolDef, get_tool
+from ur_sim_driver.description.urdf import build_urdf
 
 # [rad] the Newton solution of the first pose (within 1e-6 m / 1e-6 rad) lies this close to its
 # closed-form twin; anything farther is a different branch (or a singular pose)
@@ -106,3 +108,39 @@ class UrKinematics(Kinematics):
                       np.concatenate([res_r[:end], tail.residual_rot]),
                       np.concatenate([iters[:end], tail.iterations]),
                       None if tail.failed is None else end + tail.failed)
+
+
+def ur_kinematics(robot: URParams | str, tool: ToolDef | str | None = "dispenser", frame: str | None = None,
+                  base_pose: np.ndarray | None = None, tf_prefix: str = "") -> Kinematics:
+    """Kinematics of a UR arm from ``ur_sim_driver``'s description (no simulator import).
+
+    A frame fixed to the flange (tool0, a tool tip, ...) gets a :class:`UrKinematics`, whose
+    path IK uses the closed-form UR solution; any other frame a plain :class:`Kinematics`.
+
+    Args:
+        robot: The arm's parameters, or its type's name ('ur5', 'ur5e', 'ur10', 'ur10e'), loaded here.
+        tool: Tool on tool0, or its name ('dispenser' or None/'none').
+        frame: Frame to compute; default: the tool tip, or 'tool0' without a tool.
+        base_pose: World pose (4, 4) of base_link; identity (robot at the world origin) if None.
+        tf_prefix: Prefix of every frame and joint name.
+    """
+    params = load_ur_params(robot) if isinstance(robot, str) else robot
+    tool_def = get_tool(tool) if tool is None or isinstance(tool, str) else tool
+    if frame is None:
+        frame = tool_def.tip_name if tool_def is not None else "tool0"
+    urdf = _ur_urdf(params, tool_def, tf_prefix)
+    try:
+        return UrKinematics(urdf, joint_names(tf_prefix), tf_prefix + frame, params.dh, base_pose, tf_prefix + "tool0")
+    except NotOnFlangeError:
+        return Kinematics(urdf, joint_names(tf_prefix), tf_prefix + frame, base_pose=base_pose)
+
+
+_URDFS: dict[tuple[str, ToolDef | None, str], str] = {}
+
+
+def _ur_urdf(params: URParams, tool: ToolDef | None, tf_prefix: str) -> str:
+    """The URDF string of an arm with a tool (built once per process and type: it is pure and immutable)."""
+    key = (params.name, tool, tf_prefix)
+    if key not in _URDFS:
+        _URDFS[key] = build_urdf(params, tf_prefix=tf_prefix, tool=tool)
+    return _URDFS[key]

@@ -18,7 +18,7 @@ import numpy as np  # noqa: E402
 from ur_glue_planner.motion.plan import GluePlan  # noqa: E402
 from ur_glue_planner.report.bead_metrics import StationProfile, bead_quality, project_onto_polyline  # noqa: E402
 from ur_glue_planner.scene.waypoints import tool_axis, windshield_model  # noqa: E402
-from ur_sim_driver.robot.dispenser import section  # noqa: E402
+from ur_sim_driver.description.bead import section  # noqa: E402
 
 LABELS = {'constant_speed': 'our planner (constant speed, blended corners, flying start)',
           'seed1': "seed 1's method (per-segment time, min-jerk spline, no blending)"}
@@ -37,7 +37,7 @@ def standoffs(plan: GluePlan, run, times: np.ndarray, points: np.ndarray) -> np.
         return None
     t = times - run.whole_t0
     q = np.column_stack([np.interp(t, whole.t, whole.q[:, j]) for j in range(whole.q.shape[1])])
-    axis = tool_axis(plan.job.tool)
+    axis = tool_axis(plan.tool)
     out = np.empty(len(points))
     for k, qk in enumerate(q):
         pose = plan.kinematics.fk(qk)

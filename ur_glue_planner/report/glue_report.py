@@ -201,4 +201,4 @@ def _render(plan: GluePlan, executed: np.ndarray | None, path: Path) -> None:
     if executed is not None:
         paths.append((executed, (1.0, 0.1, 0.1, 1.0)))
     q = plan.bead.q[len(plan.bead.q) // 3]
-    render_paths(plan.job.ur_type, plan.job.tool, q, meshes, paths, path)
+    render_paths(plan.robot, plan.tool, q, meshes, paths, path)

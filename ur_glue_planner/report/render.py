@@ -13,16 +13,16 @@ import mujoco
 import numpy as np
 
 from ur_sim_driver.description.mjcf import add_static_mesh, build_mjcf
-from ur_sim_driver.description.params import joint_names, load_ur_params
-from ur_sim_driver.description.tool import get_tool
+from ur_sim_driver.description.params import URParams, joint_names
+from ur_sim_driver.description.tool import ToolDef
 
 _MAX_SEGMENTS = 600  # per path, to stay within the renderer's geom budget
 
 
-def scene_xml(ur_type: str, tool: str | None, meshes: Sequence[tuple[str, Path, np.ndarray]], width: int,
+def scene_xml(robot: URParams, tool: ToolDef | None, meshes: Sequence[tuple[str, Path, np.ndarray]], width: int,
               height: int) -> str:
-    """MJCF of the arm and static (visual-only) meshes, with an off-screen buffer of width x height."""
-    xml = build_mjcf(load_ur_params(ur_type), tool=get_tool(tool))
+    """MJCF of the arm with its tool and static (visual-only) meshes, with an off-screen buffer of width x height."""
+    xml = build_mjcf(robot, tool=tool)
     for name, stl, pose in meshes:
         xml = add_static_mesh(xml, name, stl, pose, collide=False)
     root = ET.fromstring(xml)
@@ -46,7 +46,7 @@ def _add_path(scene: mujoco.MjvScene, points: np.ndarray, rgba: Sequence[float],
         scene.ngeom += 1
 
 
-def render_paths(ur_type: str, tool: str | None, q: np.ndarray, meshes: Sequence[tuple[str, Path, np.ndarray]],
+def render_paths(robot: URParams, tool: ToolDef | None, q: np.ndarray, meshes: Sequence[tuple[str, Path, np.ndarray]],
                  paths: Sequence[tuple[np.ndarray, Sequence[float]]], out_png: Path, width: int = 960,
                  height: int = 720, lookat: Sequence[float] = (0.0, 0.5, 0.3), distance: float = 1.55,
                  azimuth: float = 130.0, elevation: float = -35.0, path_radius: float = 0.003) -> Path:
@@ -55,7 +55,7 @@ def render_paths(ur_type: str, tool: str | None, q: np.ndarray, meshes: Sequence
     Returns:
         The PNG path written.
     """
-    model = mujoco.MjModel.from_xml_string(scene_xml(ur_type, tool, meshes, width, height))
+    model = mujoco.MjModel.from_xml_string(scene_xml(robot, tool, meshes, width, height))
     data = mujoco.MjData(model)
     for name, value in zip(joint_names(), q):
         data.qpos[model.jnt_qposadr[mujoco.mj_name2id(model, mujoco.mjtObj.mjOBJ_JOINT, name)]] = value

@@ -16,8 +16,9 @@ import mujoco
 import numpy as np
 
 from ur_glue_planner.report.render import scene_xml
-from ur_sim_driver.description.params import joint_names
-from ur_sim_driver.robot.bead import Bead, draw_bead
+from ur_sim_driver.description.bead import Bead, draw_bead
+from ur_sim_driver.description.params import URParams, joint_names
+from ur_sim_driver.description.tool import ToolDef
 
 _MAX_BEAD_SEGMENTS = 400  # geoms per frame for the bead (draw_bead thins the bead to the renderer's budget)
 BEAD_RGBA = (0.95, 0.55, 0.1, 1.0)
@@ -40,14 +41,14 @@ def add_bead(scene: mujoco.MjvScene, points: np.ndarray, widths: np.ndarray, hei
     return draw_bead(scene, Bead(points, widths, heights, times), rgba)
 
 
-def render_video(ur_type: str, tool: str | None, meshes, t: np.ndarray, q: np.ndarray, out_mp4: Path,
+def render_video(robot: URParams, tool: ToolDef | None, meshes, t: np.ndarray, q: np.ndarray, out_mp4: Path,
                  bead=None, bead_t0: float = 0.0, fps: int = 30, width: int = 640, height: int = 480,
                  lookat: Sequence[float] = (0.0, 0.6, 0.2), distance: float = 1.5, azimuth: float = -60.0,
                  elevation: float = -45.0, progress: Callable[[int, int, float], None] | None = _progress) -> dict:
     """Write the run as an MP4.
 
     Args:
-        ur_type, tool, meshes: The scene (see render.scene_xml).
+        robot, tool, meshes: The scene (see render.scene_xml).
         t: (K,) [s] recorded joint state times, increasing; q: (K, 6) [rad].
         out_mp4: File to write.
         bead: The deposit (BeadPoints, robot time) or None; bead_t0: robot time [s] of t = 0.
@@ -58,7 +59,7 @@ def render_video(ur_type: str, tool: str | None, meshes, t: np.ndarray, q: np.nd
         frames, duration [s], seconds of wall time it took, fps, size.
     """
     started = time.perf_counter()
-    model = mujoco.MjModel.from_xml_string(scene_xml(ur_type, tool, meshes, width, height))
+    model = mujoco.MjModel.from_xml_string(scene_xml(robot, tool, meshes, width, height))
     # software rendering (no GPU here): shadows and reflections cost 4x a frame; 2x multisampling keeps edges clean
     model.vis.quality.offsamples = 2
     model.vis.quality.numslices, model.vis.quality.numstacks = 12, 6  # capsules of the bead: 1/6 the triangles

@@ -21,7 +21,7 @@ from ur_glue_planner.job import GlueJob, WindshieldSpec
 from ur_glue_planner.orientation import rotation_from_zyx_euler
 from ur_glue_planner.scene.windshield import DEFAULT_WINDSHIELD, WindshieldModel
 from ur_sim_driver.description.params import rpy_to_matrix
-from ur_sim_driver.description.tool import get_tool
+from ur_sim_driver.description.tool import ToolDef, get_tool
 
 
 def windshield_model(spec: WindshieldSpec) -> WindshieldModel:
@@ -32,12 +32,12 @@ def windshield_model(spec: WindshieldSpec) -> WindshieldModel:
     return dataclasses.replace(DEFAULT_WINDSHIELD, world_from_local=tuple(tuple(r) for r in pose.tolist()))
 
 
-def tool_axis(tool: str) -> np.ndarray:
+def tool_axis(tool: ToolDef | str | None) -> np.ndarray:
     """Unit tool axis (3,) in the tip frame: tool0's z (out of the flange) seen from the tip.
 
-    For the dispenser this is the tip frame's +y: the nozzle points along it.
+    For the dispenser this is the tip frame's +y: the nozzle points along it. ``tool``: the tool or its name.
     """
-    tool_def = get_tool(tool)
+    tool_def = get_tool(tool) if tool is None or isinstance(tool, str) else tool
     if tool_def is None:
         return np.array([0.0, 0.0, 1.0])
     return tool_def.tip_in_tool0()[:3, :3].T @ np.array([0.0, 0.0, 1.0])
@@ -89,14 +89,15 @@ def auto_waypoints(model: WindshieldModel, inset: float, spacing: float, tilt: f
     return points, align_axis(reference, axis, -body)
 
 
-def job_waypoints(job: GlueJob) -> tuple[np.ndarray, np.ndarray]:
-    """Bead waypoints (K, 3) [m] and tip rotations (K, 3, 3) of a job, world frame."""
+def job_waypoints(job: GlueJob, axis: np.ndarray | None = None) -> tuple[np.ndarray, np.ndarray]:
+    """Bead waypoints (K, 3) [m] and tip rotations (K, 3, 3) of a job, world frame; ``axis``: the tool's
+    (:func:`tool_axis`; None: found from ``job.tool``)."""
     model = windshield_model(job.windshield)
     zyx = np.array(job.path.orientation_zyx)
     rots = np.array([rotation_from_zyx_euler(*e) for e in zyx])
     if job.path.source == "auto":
         return auto_waypoints(model, job.path.inset, job.path.point_spacing, math.radians(job.path.tilt_deg),
-                              job.standoff, rots[0], tool_axis(job.tool))
+                              job.standoff, rots[0], tool_axis(job.tool) if axis is None else axis)
     points = np.array(job.path.waypoints)
     if len(rots) == 1:
         rots = np.repeat(rots, len(points), axis=0)

@@ -17,8 +17,8 @@ import viser
 
 from ur_glue_planner.errors import GluePlannerError, JobError
 from ur_glue_planner.motion.ik_branch import choose_branch
-from ur_glue_planner.motion.kinematics import ur_kinematics
 from ur_glue_planner.motion.plan import GluePlan, plan_job
+from ur_glue_planner.motion.ur_arm_kinematics import ur_kinematics
 from ur_glue_planner.orientation import rotation_from_zyx_euler
 from ur_glue_planner.path.glue_path import build_glue_path
 from ur_glue_planner.scene.waypoints import windshield_model
@@ -70,6 +70,7 @@ class Studio:
         self._save_default = str(save_path)
         self.messages: list[str] = []
         self.sjob: StudioJob | None = None
+        self.tip_frame = 'tool0'  # the loaded job's tool tip: the live trail follows it
         self.teach = TeachState()
         self.reach_results: list[ReachResult | None] = []
         self.plan: GluePlan | None = None
@@ -179,16 +180,18 @@ class Studio:
             job = sjob.job
             self.teach = teach_state(job, step_deg=float(self._step.value))
             self.glass = windshield_model(job.windshield)
-            self.kin = ur_kinematics(job.ur_type, job.tool)
-            self.reach = Reach(self.kin, GlassCollision(job.ur_type, job.tool, glass_pieces(job.windshield)))
+            robot, tool = load_ur_params(job.ur_type), get_tool(job.tool)  # the job's names, resolved once
+            self.tip_frame = tool.tip_name if tool is not None else 'tool0'
+            self.kin = ur_kinematics(robot, tool)
+            self.reach = Reach(self.kin, GlassCollision(robot, tool, glass_pieces(job.windshield)))
             # The page loop checks every waypoint with its own Pinocchio and MuJoCo workspaces (not thread-safe).
-            self._reach_all = Reach(ur_kinematics(job.ur_type, job.tool),
-                                    GlassCollision(job.ur_type, job.tool, glass_pieces(job.windshield)))
-            urdf = build_urdf(load_ur_params(job.ur_type), tool=get_tool(job.tool))
+            self._reach_all = Reach(ur_kinematics(robot, tool),
+                                    GlassCollision(robot, tool, glass_pieces(job.windshield)))
+            urdf = build_urdf(robot, tool=tool)
             if self._model_view is not None:
                 self._model_view.remove()
             opacity = 0.55 if self.live is not None else None
-            self._model_view = sv.RobotView(self.server, '/model', RobotModel(urdf, ur_shapes(job.ur_type, job.tool)),
+            self._model_view = sv.RobotView(self.server, '/model', RobotModel(urdf, ur_shapes(robot, tool)),
                                             opacity=opacity)
             self._show_glass()
             self.plan = self.timeline = self.clock = None
@@ -520,7 +523,6 @@ class Studio:
                 self._live_view.remove()
             self._live_urdf = urdf
             self._live_view = sv.RobotView(self.server, '/live', RobotModel(urdf))
-            self._tip_frame = self._live_tip_frame()
         state = self.live.state()
         if self._live_view is None or state is None or state.stamp == self._live_stamp:
             return
@@ -528,7 +530,7 @@ class Studio:
         self._live_view.show(state.names, state.q)
         self.live_updates += 1
         self._draw_bead()
-        tip = self._live_view.robot.frame_position(self._tip_frame, state.names, state.q)
+        tip = self._live_view.robot.frame_position(self.tip_frame, state.names, state.q)
         if tip is not None and (not self._trail or np.linalg.norm(tip - self._trail[-1]) > 5e-4):
             self._trail.append(tip)
 
@@ -549,12 +551,6 @@ class Studio:
             point_size=float(np.mean(bead.widths)), point_shape='circle')
         self.bead_points_drawn = len(bead.points)
 
-    def _live_tip_frame(self) -> str:
-        if self.sjob is not None:
-            tool = get_tool(self.sjob.job.tool)
-            if tool is not None:
-                return tool.tip_name
-        return 'tool0'
 
     def _draw_trail(self) -> None:
         # Only the new part is sent, as its own piece: the page keeps the earlier pieces.

@@ -21,8 +21,8 @@ import numpy as np
 from ur_glue_planner.motion.ik_branch import start_branches
 from ur_glue_planner.motion.kinematics import Kinematics
 from ur_sim_driver.description.mjcf import add_static_mesh, build_mjcf
-from ur_sim_driver.description.params import joint_names, load_ur_params
-from ur_sim_driver.description.tool import get_tool
+from ur_sim_driver.description.params import URParams, joint_names
+from ur_sim_driver.description.tool import ToolDef
 
 
 @dataclass(frozen=True)
@@ -38,12 +38,12 @@ class GlassCollision:
     """Robot (with tool) and the windshield's collision pieces in MuJoCo, for contact queries at given q.
 
     Args:
-        ur_type, tool: The arm and its tool.
+        robot, tool: The arm's parameters and its tool.
         pieces: (STL path, world pose (4, 4)) of each convex glass piece.
     """
 
-    def __init__(self, ur_type: str, tool: str, pieces: list[tuple[Path, np.ndarray]]) -> None:
-        xml = build_mjcf(load_ur_params(ur_type), tool=get_tool(tool))
+    def __init__(self, robot: URParams, tool: ToolDef | None, pieces: list[tuple[Path, np.ndarray]]) -> None:
+        xml = build_mjcf(robot, tool=tool)
         for k, (stl, pose) in enumerate(pieces):
             xml = add_static_mesh(xml, f'glass_{k:02d}', stl, pose, collide=True)
         self.model = mujoco.MjModel.from_xml_string(xml)

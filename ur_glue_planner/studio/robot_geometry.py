@@ -18,8 +18,8 @@ import pinocchio as pin
 import trimesh
 
 from ur_sim_driver.description.mjcf import build_mjcf
-from ur_sim_driver.description.params import UR_TYPES, Origin, load_ur_params
-from ur_sim_driver.description.tool import get_tool
+from ur_sim_driver.description.params import UR_TYPES, Origin, URParams, load_ur_params
+from ur_sim_driver.description.tool import ToolDef, get_tool
 
 LINK_COLOR = (150, 160, 175)
 TOOL_COLOR = (230, 125, 25)
@@ -47,11 +47,9 @@ def _geom_mesh(kind: int, size: np.ndarray) -> trimesh.Trimesh | None:
     return None
 
 
-def ur_shapes(ur_type: str, tool: str | None, tf_prefix: str = '') -> list[LinkShape]:
+def ur_shapes(robot: URParams, tool_def: ToolDef | None, tf_prefix: str = '') -> list[LinkShape]:
     """The simulator's link shapes of a UR arm with its tool, and a small sphere at the tool tip."""
-    model = mujoco.MjModel.from_xml_string(build_mjcf(load_ur_params(ur_type), tf_prefix=tf_prefix,
-                                                      tool=get_tool(tool)))
-    tool_def = get_tool(tool)
+    model = mujoco.MjModel.from_xml_string(build_mjcf(robot, tf_prefix=tf_prefix, tool=tool_def))
     shapes = []
     for g in range(model.ngeom):
         body = model.body(model.geom_bodyid[g]).name
@@ -169,5 +167,5 @@ def shapes_for(urdf: str) -> list[LinkShape]:
     if name in UR_TYPES:
         prefix = next((ln[:-len('shoulder_link')] for ln in links if ln.endswith('shoulder_link')), '')
         tool = next((t for t in ('dispenser',) if prefix + t in links), None)
-        return ur_shapes(name, tool, prefix)
+        return ur_shapes(load_ur_params(name), get_tool(tool), prefix)
     return urdf_shapes(urdf)

@@ -27,7 +27,7 @@ from ur_glue_planner.execution.dispenser_io import DispenserIO
 from ur_glue_planner.execution.run import Interrupted, describe, execute
 from ur_glue_planner.job import GlueJob
 from ur_glue_planner.motion.plan import GluePlan, plan_job
-from ur_sim_driver.ros.spin_thread import SpinThread
+from ur_sim_driver.spin_thread import SpinThread
 
 
 @dataclass(frozen=True)

@@ -30,9 +30,9 @@ from sensor_msgs.msg import PointCloud2
 from std_srvs.srv import Trigger
 
 from ur_sim_driver.controllers.base import Component, Cycle, Host
+from ur_sim_driver.description.bead import Bead, to_cloud
 from ur_sim_driver.description.tool import get_tool
 from ur_sim_driver.motion.conversions import sec_to_time
-from ur_sim_driver.robot.bead import Bead, to_cloud
 from ur_sim_driver.robot.dispenser import MAX_STANDOFF, BeadTrack, FlowState, flow_step
 
 PUBLISH_PERIOD = 0.1  # [s] of simulated time between bead messages while it grows

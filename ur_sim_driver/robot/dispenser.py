@@ -49,11 +49,10 @@ from dataclasses import dataclass, replace
 
 import numpy as np
 
+from ur_sim_driver.description.bead import ASPECT, Bead
 from ur_sim_driver.errors import ConfigError
-from ur_sim_driver.robot.bead import Bead
 from ur_sim_driver.robot.io_bank import N_DIGITAL
 
-ASPECT = 1.2  # height / width of the bead's triangular section
 IDLE_FLOW = 1e-3  # share of flow_rate below which a dispenser switched off is idle
 MAX_STANDOFF = 0.05  # [m] farther than this from the tip along the nozzle axis, no surface catches the material
 POINT_SPACING = 0.001  # [m] of track between reported bead points
@@ -107,12 +106,6 @@ class DispenserParams:
     def nozzle(self) -> float:
         """Nozzle diameter [m]."""
         return self.nozzle_diameter * 1e-3
-
-
-def section(area: np.ndarray | float) -> tuple[np.ndarray, np.ndarray]:
-    """Width and height [m] of the triangular bead section of ``area`` [m^2]."""
-    w = np.sqrt(2.0 * np.maximum(area, 0.0) / ASPECT)
-    return w, ASPECT * w
 
 
 # ---- flow ------------------------------------------------------------------------------------------------

@@ -56,7 +56,7 @@ from ur_sim_driver.ros.dashboard import DashboardClient
 from ur_sim_driver.ros.robot_state_publisher import RobotStatePublisher
 from ur_sim_driver.ros.sim_io import SimulatedInputs
 from ur_sim_driver.ros.sim_wrench import AppliedWrenches
-from ur_sim_driver.ros.spin_thread import SpinThread
+from ur_sim_driver.spin_thread import SpinThread
 
 GIL_SWITCH_INTERVAL = 2e-4  # [s]
 VIEWER_FRAME_PERIOD = 1.0 / 30.0  # [s] of wall time

@@ -1,6 +1,9 @@
-"""A glue bead as laid on a surface: centre line, width, height and time of every point.
+"""A glue bead as laid on a surface: centre line, width, height and time of every point; its section's shape.
 
-Stable API (used by the simulator's dispenser and by ur_glue_planner's report and video):
+Shared by the simulator's dispenser and ur_glue_planner's listener, report and video, so both sides agree on the
+bead's shape and its message layout:
+
+* ``ASPECT`` and :func:`section` (area [m^2]) -> (width, height) [m]: the bead's triangular section on its base.
 
 * :class:`Bead` (frozen): ``points`` (N, 3) [m], centre of the bead's base on the surface, in the frame
   the bead is expressed in (ur_sim: ``<tf_prefix>base``); ``widths`` (N,) [m] across the base;
@@ -33,6 +36,7 @@ if TYPE_CHECKING:  # the message types are imported where used: the pure model (
 
 # ur_sim's ``base`` frame in the MuJoCo world for an arm at the origin (base_link = world; base = Rz(pi)).
 BASE_IN_WORLD = np.diag([-1.0, -1.0, 1.0, 1.0])
+ASPECT = 1.2  # height / width of the bead's triangular section (a V-cut nozzle's windshield bead: 10 mm x 12 mm)
 GAP = 0.005  # [m] consecutive points farther apart than this are drawn unconnected (a gap in the bead)
 
 # The cloud's point layout: 5 float32 then the float64 time, 28 bytes, no padding.
@@ -41,6 +45,12 @@ CLOUD_DTYPE = np.dtype([('x', '<f4'), ('y', '<f4'), ('z', '<f4'), ('width', '<f4
 _FLOAT32, _FLOAT64 = 7, 8  # sensor_msgs/PointField datatypes
 _FIELD_TYPES = {_FLOAT32: '<f4', _FLOAT64: '<f8'}
 _NP_TO_FIELD = {np.dtype('<f4'): _FLOAT32, np.dtype('<f8'): _FLOAT64}
+
+
+def section(area: np.ndarray | float) -> tuple[np.ndarray, np.ndarray]:
+    """Width and height [m] of the triangular bead section of ``area`` [m^2]: A = w h / 2, h = ASPECT w."""
+    w = np.sqrt(2.0 * np.maximum(area, 0.0) / ASPECT)
+    return w, ASPECT * w
 
 
 @dataclass(frozen=True, eq=False)
