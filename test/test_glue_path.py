@@ -12,12 +12,12 @@ from ur_glue_planner.errors import PlanningError
 from ur_glue_planner.orientation import (
     matrix_from_quat,
     quat_from_matrix,
-    quat_multiply,
     rot_x,
     rot_y,
     rot_z,
     rotation_angle,
     rotation_from_zyx_euler,
+    rotation_vectors,
     slerp,
 )
 from ur_glue_planner.path.glue_path import GluePath, build_glue_path, polyline_corners
@@ -175,9 +175,14 @@ def test_quaternion_matrix_round_trip_including_half_turns():
     mats += [rotation_from_zyx_euler(*a) for a in rng.uniform(-3, 3, (20, 3))]
     mats = np.array(mats)
     np.testing.assert_allclose(matrix_from_quat(quat_from_matrix(mats)), mats, atol=1e-14)
+    # the turn from a to b in world axes: b = exp([v]x) a, with |v| the angle between them
     qa, qb = quat_from_matrix(mats[4]), quat_from_matrix(mats[5])
-    np.testing.assert_allclose(matrix_from_quat(quat_multiply(qa, qb)), mats[4] @ mats[5],
-                               atol=1e-14)
+    v = rotation_vectors(qa, qb)
+    angle = np.linalg.norm(v)
+    assert angle == pytest.approx(rotation_angle(mats[4], mats[5]), abs=1e-14)
+    k = np.array([[0, -v[2], v[1]], [v[2], 0, -v[0]], [-v[1], v[0], 0]]) / angle
+    turn = np.eye(3) + math.sin(angle) * k + (1 - math.cos(angle)) * k @ k  # Rodrigues, written out to check SciPy's
+    np.testing.assert_allclose(turn @ mats[4], mats[5], atol=1e-14)
 
 
 @pytest.mark.parametrize("closed", [False, True])

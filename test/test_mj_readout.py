@@ -2,7 +2,7 @@
 import mujoco
 import numpy as np
 
-from ur_sim_driver.physics.mj_readout import mat_to_quat, read_dynamics, read_joints, read_pose
+from ur_sim_driver.physics.mj_readout import read_dynamics, read_joints
 
 # A free box first (7 qpos, 6 dofs), then a chain of three hinges: joint addresses do not start at 0.
 XML = """<mujoco><worldbody>
@@ -36,22 +36,6 @@ def _indices(m, order=('j2', 'j3', 'j1')):
     return qpos, dof, act
 
 
-def test_quaternion_equals_mujoco_in_every_branch_and_sign():
-    rng = np.random.default_rng(0)
-    branches = set()
-    for k in range(4000):
-        q = rng.normal(size=4)
-        q[k % 4] *= 20.0  # each component in turn the largest: each of the four branches
-        q /= np.linalg.norm(q)
-        mat = np.empty(9)
-        mujoco.mju_quat2Mat(mat, q)
-        want = np.empty(4)
-        mujoco.mju_mat2Quat(want, mat)
-        assert np.abs(np.array(mat_to_quat(*mat)) - want).max() < 1e-14
-        branches.add(int(np.argmax(np.abs(q))))
-    assert branches == {0, 1, 2, 3}
-
-
 def test_joints_and_dynamics_are_read_at_their_addresses():
     m, d = _model()
     qpos, dof, act = _indices(m)
@@ -65,15 +49,3 @@ def test_joints_and_dynamics_are_read_at_their_addresses():
     assert np.array_equal(mass, full[np.ix_(dof, dof)])
     assert np.array_equal(bias, d.qfrc_bias[dof] - d.qfrc_passive[dof])
     assert d.qfrc_passive[dof].any()  # the damped joint makes the passive term count
-
-
-def test_site_pose_in_a_body_frame_equals_mujocos_routines():
-    m, d = _model()
-    site, base = m.site('tcp').id, m.body('base').id
-    out = np.empty(7)
-    read_pose(d.site_xpos[site], d.site_xmat[site], d.xpos[base], d.xmat[base], out)
-    r_base, r_site = d.xmat[base].reshape(3, 3), d.site_xmat[site].reshape(3, 3)
-    assert np.allclose(out[:3], r_base.T @ (d.site_xpos[site] - d.xpos[base]), rtol=0, atol=1e-14)
-    want = np.empty(4)
-    mujoco.mju_mat2Quat(want, (r_base.T @ r_site).ravel())
-    assert np.allclose(out[3:], want[[1, 2, 3, 0]], rtol=0, atol=1e-14)

@@ -31,7 +31,7 @@ import numpy as np
 
 from ur_glue_planner.errors import PlanningError
 from ur_glue_planner.motion.kinematics import Kinematics
-from ur_glue_planner.orientation import matrix_from_quat, quat_conjugate, quat_from_matrix, quat_multiply
+from ur_glue_planner.orientation import matrix_from_quat, quat_from_matrix, rotation_vectors
 from ur_glue_planner.path.glue_path import GluePath
 from ur_glue_planner.path.timing import PathTiming, SpeedLimit, Usage, time_path
 
@@ -101,16 +101,6 @@ class JointPlan:
     retimes: int
 
 
-def _rotvec_small(q: np.ndarray) -> np.ndarray:
-    """Rotation vectors (M, 3) of unit quaternions (M, 4) of small rotations (< pi)."""
-    q = np.where(q[:, :1] < 0.0, -q, q)
-    v = q[:, 1:]
-    nv = np.linalg.norm(v, axis=1)
-    angle = 2.0 * np.arctan2(nv, q[:, 0])
-    scale = np.where(nv > 1e-300, angle / np.where(nv > 1e-300, nv, 1.0), 2.0)
-    return v * scale[:, None]
-
-
 def orientations_and_rates(path: GluePath, s: np.ndarray, h: float = _H_ORIENT
                            ) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
     """Path orientations (M, 3, 3) at s (M,) [m], with :func:`orientation_rates`, from one quaternion evaluation."""
@@ -121,8 +111,8 @@ def orientations_and_rates(path: GluePath, s: np.ndarray, h: float = _H_ORIENT
     ends = c != s  # only an open path's ends shift the stencil
     if np.any(ends):
         q[ends] = path.quaternion(s[ends])
-    fwd = _rotvec_small(quat_multiply(qp, quat_conjugate(q0))) / h  # w_s at c + h/2
-    back = _rotvec_small(quat_multiply(q0, quat_conjugate(qm))) / h  # w_s at c - h/2
+    fwd = rotation_vectors(q0, qp) / h  # w_s at c + h/2
+    back = rotation_vectors(qm, q0) / h  # w_s at c - h/2
     return matrix_from_quat(q), 0.5 * (fwd + back), (fwd - back) / h
 
 

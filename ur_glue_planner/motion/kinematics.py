@@ -14,6 +14,7 @@ from dataclasses import dataclass
 
 import numpy as np
 import pinocchio as pin
+from scipy.spatial.transform import Rotation
 
 from ur_glue_planner.errors import PlanningError
 
@@ -64,16 +65,9 @@ class PathIk:
 
 
 def pose_errors(targets: np.ndarray, position: np.ndarray, rotation: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
-    """Position error [m] and rotation angle [rad] (M,) between target poses (M, 4, 4) and (M, 3), (M, 3, 3).
-
-    The angle comes from both the sine and the cosine of the relative rotation, so it stays
-    accurate down to 1e-16 rad (an arccos of the trace would bottom out near 1e-8 rad).
-    """
-    rel = targets[:, :3, :3] @ np.swapaxes(rotation, 1, 2)
-    sin2 = np.stack([rel[:, 2, 1] - rel[:, 1, 2], rel[:, 0, 2] - rel[:, 2, 0], rel[:, 1, 0] - rel[:, 0, 1]], axis=1)
-    cos2 = np.trace(rel, axis1=1, axis2=2) - 1.0
-    return (np.linalg.norm(targets[:, :3, 3] - position, axis=1),
-            np.arctan2(np.linalg.norm(sin2, axis=1), cos2))
+    """Position error [m] and rotation angle [rad] (M,) between target poses (M, 4, 4) and (M, 3), (M, 3, 3)."""
+    rel = Rotation.from_matrix(targets[:, :3, :3]) * Rotation.from_matrix(rotation).inv()
+    return np.linalg.norm(targets[:, :3, 3] - position, axis=1), rel.magnitude()
 
 
 def serial_drift(jac: np.ndarray, qd: np.ndarray) -> np.ndarray:
@@ -297,7 +291,7 @@ class Kinematics:
         it = 0
         while True:
             p, r, jac = self.fk_jacobian(q)
-            e = np.concatenate([p_t - p, pin.log3(r_t @ r.T)])
+            e = np.concatenate([p_t - p, Rotation.from_matrix(r_t @ r.T).as_rotvec()])
             rp, rr = float(np.linalg.norm(e[:3])), float(np.linalg.norm(e[3:]))
             done = (not use_pos or rp <= tol_pos) and (not use_rot or rr <= tol_rot)
             if done or it >= max_iterations:

@@ -15,6 +15,7 @@ import dataclasses
 import math
 
 import numpy as np
+from scipy.spatial.transform import Rotation
 
 from ur_glue_planner.errors import JobError
 from ur_glue_planner.job import GlueJob, WindshieldSpec
@@ -52,11 +53,10 @@ def align_axis(reference: np.ndarray, axis: np.ndarray, direction: np.ndarray) -
     c = d @ a
     if np.any(c <= -1.0 + 1e-9):
         raise ValueError("direction opposite to the reference tool axis: the turn is not unique")
-    vx = np.zeros(d.shape[:-1] + (3, 3))
-    vx[..., 0, 1], vx[..., 0, 2], vx[..., 1, 2] = -v[..., 2], v[..., 1], -v[..., 0]
-    vx[..., 1, 0], vx[..., 2, 0], vx[..., 2, 1] = v[..., 2], -v[..., 1], v[..., 0]
-    turn = np.eye(3) + vx + vx @ vx / (1.0 + c)[..., None, None]  # Rodrigues for unit vectors
-    return turn @ reference
+    sine = np.linalg.norm(v, axis=-1, keepdims=True)
+    angle = np.arctan2(sine, c[..., None])
+    turn = Rotation.from_rotvec(v * (angle / np.where(sine > 0.0, sine, 1.0)))  # about a x d, by the angle between
+    return turn.as_matrix() @ reference
 
 
 def auto_waypoints(model: WindshieldModel, inset: float, spacing: float, tilt: float, standoff: float,

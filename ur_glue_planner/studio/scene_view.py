@@ -5,9 +5,8 @@ from collections.abc import Sequence
 
 import numpy as np
 import viser
-import viser.transforms as vtf
 
-from ur_glue_planner.orientation import quat_from_matrix
+from ur_glue_planner.orientation import matrix_from_quat, quat_from_matrix
 from ur_glue_planner.studio.robot_geometry import RobotModel
 
 GREEN = (40, 190, 70)
@@ -72,4 +71,4 @@ def pose_to_wxyz_xyz(pose: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
 
 def rotation_of(wxyz_value: Sequence[float]) -> np.ndarray:
     """Rotation (3, 3) of a (w, x, y, z) quaternion."""
-    return vtf.SO3(np.asarray(wxyz_value, dtype=float)).as_matrix()
+    return matrix_from_quat(np.asarray(wxyz_value, dtype=float))

@@ -26,6 +26,7 @@ import mujoco
 import numpy as np
 from rclpy.node import Node
 from rclpy.qos import DurabilityPolicy, QoSProfile, ReliabilityPolicy
+from scipy.spatial.transform import Rotation
 from sensor_msgs.msg import PointCloud2
 from std_srvs.srv import Trigger
 
@@ -41,14 +42,6 @@ MIN_WALL_PERIOD = 0.05  # [s] of wall time between periodic bead messages
 # a tip touching or slightly pressed into the glass still finds its surface.
 RAY_BACKSET = 0.01  # [m]
 _ML = 1e6  # [ml] per [m^3]
-
-
-def quat_matrix(xyzw: np.ndarray) -> np.ndarray:
-    """Rotation matrix (3, 3) of a unit quaternion (x, y, z, w)."""
-    x, y, z, w = xyzw
-    return np.array([[1 - 2 * (y * y + z * z), 2 * (x * y - z * w), 2 * (x * z + y * w)],
-                     [2 * (x * y + z * w), 1 - 2 * (x * x + z * z), 2 * (y * z - x * w)],
-                     [2 * (x * z - y * w), 2 * (y * z + x * w), 1 - 2 * (x * x + y * y)]])
 
 
 class SimulatedDispenser(Component):
@@ -126,8 +119,9 @@ class SimulatedDispenser(Component):
                                         f'{lost * _ML:.3f} ml lost')
 
     def _surface_point(self, cycle: Cycle) -> np.ndarray | None:
-        """Where the nozzle axis meets the nearest scene surface within reach, in the base frame, or None."""
-        r = quat_matrix(cycle.tcp_orientation)
+        """Where the nozzle axis meets the nearest scene surface within reach, in the base frame, or None; from the
+        TCP pose of the cycle's state (its time is the cycle's)."""
+        r = Rotation.from_quat(cycle.tcp_orientation).as_matrix()  # (x, y, z, w), as SciPy orders it
         axis_base = r[:, 2]
         tip_base = cycle.tcp_position + r @ self._tip
         start = self._world_r @ (tip_base - RAY_BACKSET * axis_base) + self._world_p

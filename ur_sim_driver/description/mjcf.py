@@ -50,6 +50,10 @@ _ROBOT_BITS = {True: ('1', '1'), False: ('2', '1')}
 PAYLOAD_BODY = 'payload'
 FT_FORCE_SENSOR = 'tcp_fts_force'
 FT_TORQUE_SENSOR = 'tcp_fts_torque'
+# Names (after tf_prefix) of the frame sensors giving the tool0 site's pose in the base body: MuJoCo computes it
+# with the positions (mj_step1), so the TCP pose needs no rotation code of ours.
+TCP_POSITION_SENSOR = 'tcp_pose_position'
+TCP_ORIENTATION_SENSOR = 'tcp_pose_orientation'
 _EXCLUDES = (('base_link_inertia', 'shoulder_link'), ('forearm_link', 'wrist_2_link'),
              ('wrist_1_link', 'wrist_3_link'))
 
@@ -88,7 +92,8 @@ def build_mjcf(params: URParams, tf_prefix: str = '', tool: ToolDef | None = Non
 
     Names: bodies = URDF links, hinges and motors = URDF joints, sites ``tool0`` and the tool
     tip, the massless body ``payload`` fixed at tool0 (``PAYLOAD_BODY``, for set_payload) and
-    the force and torque sensors at the tool0 site (``FT_FORCE_SENSOR``, ``FT_TORQUE_SENSOR``),
+    the force and torque sensors at the tool0 site (``FT_FORCE_SENSOR``, ``FT_TORQUE_SENSOR``), the tool0 site's
+    position and orientation in the base body (``TCP_POSITION_SENSOR``, ``TCP_ORIENTATION_SENSOR``),
     all with ``tf_prefix``.
     """
     if not (np.isfinite(timestep) and timestep > 0.0):
@@ -150,6 +155,10 @@ def build_mjcf(params: URParams, tf_prefix: str = '', tool: ToolDef | None = Non
     sensors = ET.SubElement(root, 'sensor')
     ET.SubElement(sensors, 'force', name=p + FT_FORCE_SENSOR, site=p + 'tool0')
     ET.SubElement(sensors, 'torque', name=p + FT_TORQUE_SENSOR, site=p + 'tool0')
+    # reftype xbody: the base body's frame ('body' would be the frame of its inertia)
+    tcp = {'objtype': 'site', 'objname': p + 'tool0', 'reftype': 'xbody', 'refname': p + 'base'}
+    ET.SubElement(sensors, 'framepos', name=p + TCP_POSITION_SENSOR, **tcp)
+    ET.SubElement(sensors, 'framequat', name=p + TCP_ORIENTATION_SENSOR, **tcp)
     ET.indent(root)
     return ET.tostring(root, encoding='unicode') + '\n'
 

@@ -8,6 +8,7 @@ the very same numbers.
 from __future__ import annotations
 
 import math
+import warnings
 from collections.abc import Mapping
 from dataclasses import dataclass, field
 from functools import cache
@@ -17,6 +18,7 @@ from typing import Any
 
 import numpy as np
 import yaml
+from scipy.spatial.transform import Rotation
 
 from ur_sim_driver import paths
 from ur_sim_driver.errors import ConfigError
@@ -43,44 +45,21 @@ def joint_names(tf_prefix: str = '') -> tuple[str, ...]:
 # --- frame helpers -------------------------------------------------------------------------
 
 def rpy_to_matrix(rpy: Any) -> np.ndarray:
-    """Rotation matrix (3, 3) of URDF roll-pitch-yaw angles [rad]: Rz(yaw) Ry(pitch) Rx(roll)."""
-    r, p, y = (float(v) for v in rpy)
-    cr, sr, cp, sp, cy, sy = math.cos(r), math.sin(r), math.cos(p), math.sin(p), math.cos(y), math.sin(y)
-    return np.array([
-        [cy * cp, cy * sp * sr - sy * cr, cy * sp * cr + sy * sr],
-        [sy * cp, sy * sp * sr + cy * cr, sy * sp * cr - cy * sr],
-        [-sp, cp * sr, cp * cr],
-    ])
+    """Rotation matrix (3, 3) of URDF roll-pitch-yaw angles [rad]: Rz(yaw) Ry(pitch) Rx(roll) (fixed axes x, y, z)."""
+    return Rotation.from_euler('xyz', [float(v) for v in rpy]).as_matrix()
 
 
 def matrix_to_rpy(rot: np.ndarray) -> tuple[float, float, float]:
     """URDF roll-pitch-yaw [rad] of a rotation matrix (3, 3); yaw = 0 at gimbal lock."""
-    rot = np.asarray(rot, dtype=float)
-    pitch = math.atan2(-rot[2, 0], math.hypot(rot[0, 0], rot[1, 0]))
-    if math.hypot(rot[0, 0], rot[1, 0]) < 1e-12:
-        return math.atan2(-rot[1, 2], rot[1, 1]), pitch, 0.0
-    return math.atan2(rot[2, 1], rot[2, 2]), pitch, math.atan2(rot[1, 0], rot[0, 0])
+    with warnings.catch_warnings():  # SciPy says so when it sets yaw to 0 at the gimbal lock: that is the contract
+        warnings.simplefilter('ignore', UserWarning)
+        roll, pitch, yaw = Rotation.from_matrix(np.asarray(rot, dtype=float)).as_euler('xyz')
+    return float(roll), float(pitch), float(yaw)
 
 
 def matrix_to_quat(rot: np.ndarray) -> np.ndarray:
-    """Unit quaternion (4,) as (w, x, y, z), MuJoCo's order, of a rotation matrix (3, 3)."""
-    m = np.asarray(rot, dtype=float)
-    tr = m[0, 0] + m[1, 1] + m[2, 2]
-    # Branch on the largest diagonal term for numerical accuracy.
-    if tr > 0.0:
-        s = 2.0 * math.sqrt(tr + 1.0)
-        q = [0.25 * s, (m[2, 1] - m[1, 2]) / s, (m[0, 2] - m[2, 0]) / s, (m[1, 0] - m[0, 1]) / s]
-    elif m[0, 0] > m[1, 1] and m[0, 0] > m[2, 2]:
-        s = 2.0 * math.sqrt(1.0 + m[0, 0] - m[1, 1] - m[2, 2])
-        q = [(m[2, 1] - m[1, 2]) / s, 0.25 * s, (m[0, 1] + m[1, 0]) / s, (m[0, 2] + m[2, 0]) / s]
-    elif m[1, 1] > m[2, 2]:
-        s = 2.0 * math.sqrt(1.0 + m[1, 1] - m[0, 0] - m[2, 2])
-        q = [(m[0, 2] - m[2, 0]) / s, (m[0, 1] + m[1, 0]) / s, 0.25 * s, (m[1, 2] + m[2, 1]) / s]
-    else:
-        s = 2.0 * math.sqrt(1.0 + m[2, 2] - m[0, 0] - m[1, 1])
-        q = [(m[1, 0] - m[0, 1]) / s, (m[0, 2] + m[2, 0]) / s, (m[1, 2] + m[2, 1]) / s, 0.25 * s]
-    q = np.array(q)
-    return q / np.linalg.norm(q)
+    """Unit quaternion (4,) as (w, x, y, z), MuJoCo's order, w >= 0, of a rotation matrix (3, 3)."""
+    return Rotation.from_matrix(np.asarray(rot, dtype=float)).as_quat(canonical=True, scalar_first=True)
 
 
 @dataclass(frozen=True)

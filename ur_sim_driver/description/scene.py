@@ -6,19 +6,15 @@ from pathlib import Path
 import numpy as np
 import yaml
 
+from ur_sim_driver.description.params import rpy_to_matrix
 from ur_sim_driver.errors import ConfigError
 from ur_sim_driver.paths import config_dir
 
 
 def pose_matrix(xyz: list[float], rpy: list[float]) -> np.ndarray:
     """4x4 homogeneous transform from translation [m] and fixed-axis roll, pitch, yaw [rad] (URDF convention)."""
-    r, p, y = rpy
-    cr, sr, cp, sp, cy, sy = np.cos(r), np.sin(r), np.cos(p), np.sin(p), np.cos(y), np.sin(y)
-    rot = np.array([[cy * cp, cy * sp * sr - sy * cr, cy * sp * cr + sy * sr],
-                    [sy * cp, sy * sp * sr + cy * cr, sy * sp * cr - cy * sr],
-                    [-sp, cp * sr, cp * cr]])
     t = np.eye(4)
-    t[:3, :3] = rot
+    t[:3, :3] = rpy_to_matrix(rpy)
     t[:3, 3] = xyz
     return t
 

@@ -8,7 +8,7 @@ import mujoco
 import numpy as np
 
 from ur_sim_driver.errors import ConfigError
-from ur_sim_driver.physics.mj_readout import read_dynamics, read_joints, read_pose
+from ur_sim_driver.physics.mj_readout import read_dynamics, read_joints
 
 
 @dataclass(frozen=True)
@@ -62,14 +62,14 @@ class ArmPhysics:
         joint_names: names of the arm joints in controller order (also the actuator names).
         control_dt: control period [s].
         substeps: physics steps per control period; the physics timestep is control_dt / substeps.
-        base_body: body whose frame TCP poses are expressed in (the UR `base` frame).
-        tcp_site: site at the TCP (tool0).
+        base_body: the body of the UR `base` frame.
+        tcp_sensors: names of the framepos and the framequat sensor of the TCP (tool0) in the base frame.
         payload_body: massless body fixed at tool0 whose mass properties :meth:`set_payload` sets.
         ft_sensors: names of the force and the torque sensor at the tool0 site.
     """
 
     def __init__(self, mjcf_xml: str, joint_names: tuple[str, ...], control_dt: float, substeps: int,
-                 base_body: str, tcp_site: str, payload_body: str, ft_sensors: tuple[str, str]) -> None:
+                 base_body: str, tcp_sensors: tuple[str, str], payload_body: str, ft_sensors: tuple[str, str]) -> None:
         self.model = mujoco.MjModel.from_xml_string(mjcf_xml)
         self.model.opt.timestep = control_dt / substeps
         self.data = mujoco.MjData(self.model)
@@ -91,11 +91,13 @@ class ArmPhysics:
         self._dof = _as_slice([int(m.jnt_dofadr[j]) for j in jids])
         self._act = _as_slice([self._actuator_for(j) for j in jids])
         self._base = lookup(mujoco.mjtObj.mjOBJ_BODY, base_body, 'body')
-        self._tcp = lookup(mujoco.mjtObj.mjOBJ_SITE, tcp_site, 'site')
         self._mass = np.zeros((m.nv, m.nv))
         self._payload = lookup(mujoco.mjtObj.mjOBJ_BODY, payload_body, 'body')
         sensors = [lookup(mujoco.mjtObj.mjOBJ_SENSOR, s, 'sensor') for s in ft_sensors]
         self._ft = _as_slice([int(m.sensor_adr[s]) + k for s in sensors for k in range(3)])
+        position, orientation = (int(m.sensor_adr[lookup(mujoco.mjtObj.mjOBJ_SENSOR, s, 'sensor')])
+                                 for s in tcp_sensors)
+        self._tcp_position, self._tcp_orientation = slice(position, position + 3), slice(orientation, orientation + 4)
         # Per geom, once: which belong to the robot (the subtree of the base body's root, i.e. arm and tool)
         # and the name a contact report uses (the body, or the geom for bodies fixed to the world).
         root = int(m.body_rootid[self._base])
@@ -118,8 +120,6 @@ class ArmPhysics:
         self._d_qpos, self._d_qvel, self._d_ctrl = d.qpos, d.qvel, d.ctrl
         self._d_actuator_force, self._d_bias, self._d_passive = d.actuator_force, d.qfrc_bias, d.qfrc_passive
         self._d_sensordata = d.sensordata
-        self._tcp_pos, self._tcp_mat9 = d.site_xpos[self._tcp], d.site_xmat[self._tcp]
-        self._base_pos, self._base_mat9 = d.xpos[self._base], d.xmat[self._base]
         # The readout kernels (mj_readout.py) take index arrays.
         self._i_qpos = np.array([int(m.jnt_qposadr[j]) for j in jids], dtype=np.int64)
         self._i_dof = np.array([int(m.jnt_dofadr[j]) for j in jids], dtype=np.int64)
@@ -224,10 +224,11 @@ class ArmPhysics:
         return self._contacts
 
     def tcp_pose(self) -> tuple[np.ndarray, np.ndarray]:
-        """TCP pose in the base frame: position (3,) [m] and quaternion (4,) as (x, y, z, w)."""
-        out = np.empty(7)
-        read_pose(self._tcp_pos, self._tcp_mat9, self._base_pos, self._base_mat9, out)
-        return out[:3], out[3:]
+        """TCP pose in the base frame: position (3,) [m] and quaternion (4,) as (x, y, z, w), w >= 0 (as the
+        driver's, which builds it from an axis and an angle in [0, pi])."""
+        w, x, y, z = self._d_sensordata[self._tcp_orientation]
+        sign = 1.0 if w >= 0.0 else -1.0
+        return self._d_sensordata[self._tcp_position].copy(), np.array([sign * x, sign * y, sign * z, sign * w])
 
     def wrench(self) -> np.ndarray:
         """(6,) force [N] and torque [N m] that the bodies beyond tool0 (tool, payload) exert on the arm,

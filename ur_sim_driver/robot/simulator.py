@@ -6,7 +6,15 @@ from typing import Protocol
 
 import numpy as np
 
-from ur_sim_driver.description.mjcf import FT_FORCE_SENSOR, FT_TORQUE_SENSOR, PAYLOAD_BODY, add_static_mesh, build_mjcf
+from ur_sim_driver.description.mjcf import (
+    FT_FORCE_SENSOR,
+    FT_TORQUE_SENSOR,
+    PAYLOAD_BODY,
+    TCP_ORIENTATION_SENSOR,
+    TCP_POSITION_SENSOR,
+    add_static_mesh,
+    build_mjcf,
+)
 from ur_sim_driver.description.params import joint_names as model_joint_names
 from ur_sim_driver.description.params import load_ur_params
 from ur_sim_driver.description.scene import load_scene, pose_matrix
@@ -70,7 +78,8 @@ class Simulator:
         pre = cfg.tf_prefix
         self.joint_names = tuple(j if j.startswith(pre) else pre + j for j in cfg.joints)
         self.physics = ArmPhysics(xml, model_joint_names(pre), self.control_dt, substeps,
-                                  base_body=f'{pre}base', tcp_site=f'{pre}tool0', payload_body=pre + PAYLOAD_BODY,
+                                  base_body=f'{pre}base', payload_body=pre + PAYLOAD_BODY,
+                                  tcp_sensors=(pre + TCP_POSITION_SENSOR, pre + TCP_ORIENTATION_SENSOR),
                                   ft_sensors=(pre + FT_FORCE_SENSOR, pre + FT_TORQUE_SENSOR))
         q0 = np.array(cfg.initial_positions)
         bad = np.flatnonzero((q0 < self.params.q_min) | (q0 > self.params.q_max))

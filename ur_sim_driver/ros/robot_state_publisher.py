@@ -13,6 +13,7 @@ import numpy as np
 from geometry_msgs.msg import TransformStamped
 from rclpy.node import Node
 from rclpy.qos import DurabilityPolicy, QoSProfile
+from scipy.spatial.transform import Rotation
 from std_msgs.msg import String
 from tf2_msgs.msg import TFMessage
 
@@ -22,6 +23,8 @@ from ur_sim_driver.description.params import matrix_to_quat
 from ur_sim_driver.description.tool import get_tool
 from ur_sim_driver.description.urdf import JointSpec, kinematic_tree
 from ur_sim_driver.motion import conversions as conv
+
+_Z = np.array([0.0, 0.0, 1.0])
 
 
 def _transform(joint: JointSpec) -> TransformStamped:
@@ -66,10 +69,8 @@ class RobotStatePublisher(Component):
                 tf.header.stamp = stamp
                 static.append(tf)
         moving = sorted((j for j in tree if j.index is not None), key=lambda j: j.index)
-        # Each moving transform is origin * Rz(q): its rotation is the origin's quaternion times
-        # (cos q/2, 0, 0, sin q/2); the translation does not depend on q.
-        # (w, x, y, z) of each origin, as columns (k,) for the vectorised product in update().
-        self._w, self._x, self._y, self._z = np.array([matrix_to_quat(j.origin.matrix()[:3, :3]) for j in moving]).T
+        # Each moving transform is origin * Rz(q) (UR joints turn about their z); the translation does not depend on q.
+        self._origins = Rotation.from_matrix(np.array([j.origin.matrix()[:3, :3] for j in moving]))
         self._index = np.array([j.index for j in moving], dtype=np.intp)
         # Published as CDR bytes patched in place (cdr_template.py): the rotations and stamps change.
         self._tf = CdrTemplate(
@@ -86,9 +87,7 @@ class RobotStatePublisher(Component):
         if t < self._next:
             return
         self._next = (math.floor(t / self._period) + 1) * self._period
-        half = 0.5 * cycle.state.q[self._index]
-        c, s = np.cos(half), np.sin(half)
-        w, x, y, z = self._w, self._x, self._y, self._z
-        rotations = np.stack((x * c + y * s, y * c - x * s, z * c + w * s, w * c - z * s), axis=1)  # (k, 4) xyzw
+        turns = Rotation.from_rotvec(cycle.state.q[self._index, None] * _Z)
+        rotations = (self._origins * turns).as_quat()  # (k, 4), (x, y, z, w) as ROS orders them
         self._tf.publish(rotations.reshape(-1), cycle.stamp_parts)
 
