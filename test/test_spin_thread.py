@@ -54,6 +54,25 @@ def test_stop_after_the_context_is_shut_down_returns():
         node.destroy_node()
 
 
+class _ShutsDownWhileSpinning(SingleThreadedExecutor):
+    """Its context is shut down inside spin_once, after SpinThread's check: the window a racing shutdown hits."""
+
+    def spin_once(self, timeout_sec=None):
+        self.context.try_shutdown()
+        super().spin_once(timeout_sec=timeout_sec)
+
+
+def test_a_shutdown_inside_spin_once_ends_the_thread_quietly():
+    with ros_context() as ctx:
+        node = Node('spin_thread_shutdown', context=ctx)
+        executor = _ShutsDownWhileSpinning(context=ctx)
+        executor.add_node(node)
+        spinner = SpinThread(executor).start()
+        wait_for(lambda: not spinner.running, what='the spin thread to end')
+        assert spinner.stop(timeout=5.0)
+        node.destroy_node()
+
+
 def test_pace_rests_after_each_callback_and_stop_cuts_a_rest_short():
     with ros_context() as ctx:
         node = Node('spin_thread_pace', context=ctx)

@@ -45,6 +45,11 @@ class SpinThread:
                         self._stop.wait(rest)
         except ExternalShutdownException:
             pass  # the context went first: nothing left to spin
+        except Exception:
+            # Shut down between the loop's check and the executor's wait: rclpy raises RCLError ("the given context
+            # is not valid") from the wait set instead of ExternalShutdownException. Nothing left to spin either.
+            if context.ok():
+                raise
 
     @property
     def running(self) -> bool:
