@@ -376,8 +376,6 @@ class RobotKeeper:
             self._call('resend_robot_program')
         # The controller_stopper restores the controllers it stopped in the next cycle: wait for it, then compare.
         wait_for(lambda: self.h.sim._refusal is None, what='the robot ready to move and its controllers back')
-        # The controller_stopper's activations reach the gateway process over its pipe: held still until applied.
-        wait_still(lambda: self.h.sim.gateway.settled, what='the gateway to apply the activations')
         states = self.cm.states()
         now = {name for name, state in states.items() if state == 'active'}
         if now != self.active:

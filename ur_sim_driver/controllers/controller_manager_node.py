@@ -29,7 +29,6 @@ from ur_sim_driver.motion import conversions as conv
 
 NAME = 'controller_manager'
 BASE_CLASS = 'controller_interface::ControllerInterface'
-SETTLE_TIMEOUT = 5.0  # [s] the gateway takes to learn a switch (a pipe message; far less in practice)
 TIMED_OUT = 'Switch controller request timed out before the control loop took it; nothing was switched.'
 
 
@@ -168,10 +167,6 @@ class ControllerManagerNode:
                 self.node.get_logger().error(TIMED_OUT)
                 response.ok, response.message = False, TIMED_OUT
                 return response
-            for name in plan.activate + plan.deactivate:
-                wait = getattr(self.components[name], 'wait_settled', None)
-                if wait is not None and not wait(SETTLE_TIMEOUT):
-                    self.node.get_logger().warning(f'{name}: its action server did not confirm the switch in time')
         response.ok, response.message = plan.ok, plan.message
         return response
 

@@ -17,8 +17,6 @@ words (the gateway learns each switch before switch_controller answers).
 """
 from __future__ import annotations
 
-import threading
-
 import numpy as np
 from control_msgs.msg import JointTrajectoryControllerState, SpeedScalingFactor
 from control_msgs.srv import QueryTrajectoryState
@@ -34,10 +32,9 @@ from ur_sim_driver.controllers.joint_command import JointCommandController
 from ur_sim_driver.controllers.ur_hardware import joint_interfaces, prefixed_joints
 from ur_sim_driver.errors import TrajectoryError
 from ur_sim_driver.gateway.gateway_link import Cancel, Canceled, Ended, Feedback, GatewayLink, Start
-from ur_sim_driver.gateway.trajectory_gateway import INACTIVE_GOAL, INACTIVE_TOPIC
 from ur_sim_driver.motion import conversions as conv
 from ur_sim_driver.motion import result_codes
-from ur_sim_driver.motion.jtc import Outcome, TrajectoryController
+from ur_sim_driver.motion.jtc import INACTIVE_GOAL, INACTIVE_TOPIC, Outcome, TrajectoryController
 from ur_sim_driver.motion.trajectory import TrajectorySample
 from ur_sim_driver.motion.validation import map_to_config_order
 from ur_sim_driver.physics.physics import ArmState
@@ -72,7 +69,6 @@ class JointTrajectoryControllerComponent(JointCommandController):
         self._link = link
         self._feedback_every = max(1, feedback_every)
         self._token = None
-        self._settled: threading.Event | None = None
         self.speed_scaling_received = 0  # speed_scaling_input messages handled
 
     def interfaces(self, cfg: SimConfig) -> tuple[tuple[str, ...], tuple[str, ...]]:
@@ -107,7 +103,6 @@ class JointTrajectoryControllerComponent(JointCommandController):
     def on_activate(self) -> None:
         self.stop_reason = None
         self.core.hold(self.host.sim.state().q)  # upstream holds the current position on activation
-        self._settled = self._link.activation(self.name, True)
 
     def on_deactivate(self) -> None:
         token = self.core.active_token
@@ -117,12 +112,16 @@ class JointTrajectoryControllerComponent(JointCommandController):
                 f'the controller was deactivated: {self.stop_reason}'
             self._finish(Outcome(token, result_codes.INVALID_GOAL, reason))
         self._token = None
-        self._settled = self._link.activation(self.name, False)
 
-    def wait_settled(self, timeout: float) -> bool:
-        """Wait until the gateway applied the last switch of this controller (False on timeout)."""
-        event = self._settled
-        return event is None or event.wait(timeout)
+    def refusal(self, topic: bool) -> str | None:
+        """Under the lock: why this controller refuses a goal (or a topic message) now, or None; the robot's state
+        first (the controller_stopper keeps the controller inactive while the robot cannot move)."""
+        refusal = self.host.robot.motion_refusal()
+        if refusal is not None:
+            return f'the controller is not running: {refusal}'
+        if not self.active:
+            return INACTIVE_TOPIC if topic else INACTIVE_GOAL
+        return None
 
     def command(self, state: ArmState, period: float) -> tuple[TrajectorySample, np.ndarray | None]:
         sample, outcome = self.core.update(state.t, period, state.q, state.qd)
@@ -167,12 +166,8 @@ class JointTrajectoryControllerComponent(JointCommandController):
                 return
             preempted = None
             with host.lock:
-                refusal = host.robot.motion_refusal()
-                if refusal is not None:  # the controller_stopper keeps it inactive: say why
-                    refusal = f'the controller is not running: {refusal}'
-                elif not self.active:
-                    refusal = INACTIVE_GOAL if message.token is not None else INACTIVE_TOPIC
-                else:
+                refusal = self.refusal(topic=message.token is None)  # admitted, but the state may have changed since
+                if refusal is None:
                     state = host.sim.state()
                     preempted = self.core.start(points, state.t, state.q, state.qd, token=message.token,
                                                 tolerances=message.tolerances)

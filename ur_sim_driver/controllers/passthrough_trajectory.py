@@ -24,7 +24,7 @@ from ur_sim_driver.errors import TrajectoryError
 from ur_sim_driver.gateway.gateway_link import Cancel, Canceled, Ended, GatewayLink, Start
 from ur_sim_driver.motion import result_codes
 from ur_sim_driver.motion.jtc import TrajectoryController
-from ur_sim_driver.motion.passthrough import DEACTIVATED, INACTIVE, PassthroughTolerances, judge_end, robot_points
+from ur_sim_driver.motion.passthrough import BUSY, DEACTIVATED, INACTIVE, PassthroughTolerances, judge_end, robot_points
 from ur_sim_driver.motion.trajectory import TrajectorySample
 from ur_sim_driver.motion.validation import map_to_config_order
 from ur_sim_driver.physics.physics import ArmState
@@ -63,7 +63,6 @@ class PassthroughTrajectoryController(JointCommandController):
         self.core = core
         self._link = link
         self._goal: _Goal | None = None
-        self._settled = None
 
     def interfaces(self, cfg: SimConfig) -> tuple[tuple[str, ...], tuple[str, ...]]:
         p = cfg.tf_prefix
@@ -78,7 +77,6 @@ class PassthroughTrajectoryController(JointCommandController):
     def on_activate(self) -> None:
         self.stop_reason = None
         self.core.hold(self.host.sim.state().q)
-        self._settled = self._link.activation(self.name, True)
 
     def on_deactivate(self) -> None:
         self.core.hold(self.host.sim.state().q)
@@ -86,12 +84,13 @@ class PassthroughTrajectoryController(JointCommandController):
         if goal is not None:
             reason = DEACTIVATED if self.stop_reason is None else f'{DEACTIVATED} ({self.stop_reason})'
             self._link.send(Ended(goal.token, result_codes.INVALID_GOAL, reason))
-        self._settled = self._link.activation(self.name, False)
 
-    def wait_settled(self, timeout: float) -> bool:
-        """Wait until the gateway applied the last switch of this controller (False on timeout)."""
-        event = self._settled
-        return event is None or event.wait(timeout)
+    def refusal(self, topic: bool) -> str | None:
+        """Under the lock: why this controller refuses a goal now, or None (it has no topic: `topic` is unused)."""
+        refusal = self.host.robot.motion_refusal()
+        if refusal is not None:
+            return f'the controller is not running: {refusal}'
+        return None if self.active else INACTIVE
 
     def command(self, state: ArmState, period: float) -> tuple[TrajectorySample, np.ndarray | None]:
         goal = self._goal
@@ -138,14 +137,10 @@ class PassthroughTrajectoryController(JointCommandController):
             given_velocity = message.command.sizes[-1, 1] > 0
             final_velocity = points.velocities[-1] if given_velocity else None
             with host.lock:
-                refusal = host.robot.motion_refusal()
-                if refusal is not None:
-                    refusal = f'the controller is not running: {refusal}'
-                elif not self.active:
-                    refusal = INACTIVE
-                elif self._goal is not None:  # the gateway refuses a second goal: only a race gets here
-                    refusal = 'Can\'t accept new trajectory. A trajectory is already executing.'
-                else:
+                refusal = self.refusal(topic=False)  # admitted, but the state may have changed since
+                if refusal is None and self._goal is not None:  # the gateway refuses a second goal: a race only
+                    refusal = BUSY
+                if refusal is None:
                     state = host.sim.state()
                     self.core.start(points, state.t, state.q, state.qd)
                     self._goal = _Goal(message.token, tol, last.copy(), final_velocity, points.duration)

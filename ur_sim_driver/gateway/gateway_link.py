@@ -3,34 +3,31 @@
 The trajectory controllers' action servers and joint_trajectory subscriptions live in a process of their own
 (``trajectory_gateway.py``), so that receiving and converting a large trajectory (rclpy takes an action goal in
 C while holding the GIL: about 0.1 s per 100,000 points here even read straight into arrays, ``goal_intake.py``)
-never stops the simulation loop, which must publish every 2 ms. The two processes exchange the small messages
-below over a pipe, in order:
+never stops the simulation loop, which must publish every 2 ms. The gateway's job is intake: it takes goals and
+messages in, converts and validates them, and owns the action goals' handles until they end. Everything about the
+robot and the controllers (which is active, whether the robot can move, the simulated time) is owned by the
+simulation and asked for, never copied: the two processes exchange the small messages below over one pipe, in
+order:
 
-* gateway -> simulation: :class:`Start` (a validated trajectory, in the sender's joint order), :class:`Cancel`,
-  :class:`Dropped` (a joint_trajectory message refused), :class:`Ack` (an :class:`Activation` has been applied);
-* simulation -> gateway: :class:`Ended` (a goal's outcome), :class:`Canceled` (the answer to a Cancel),
-  :class:`Feedback`, :class:`Gate` (whether the robot may take commands now), :class:`Activation` (a controller
-  was switched by the controller manager).
+* gateway -> simulation: :class:`Admit` (may this controller take a goal or message now?), :class:`Start` (a
+  validated trajectory, in the sender's joint order), :class:`Cancel`, :class:`Dropped` (a joint_trajectory
+  message refused);
+* simulation -> gateway: :class:`Admission` (the answer to Admit, with the simulated time), :class:`Ended` (a
+  goal's outcome), :class:`Canceled` (the answer to a Cancel), :class:`Feedback`.
 
-One gateway process serves every trajectory controller (each a node of its own there); Start, Cancel and
-Activation name the controller, the other messages follow the goal's token.
+One gateway process serves every trajectory controller from one node of its own (``ur_sim_trajectory_gateway``:
+the controllers' nodes are ur_sim's); Admit, Start and Cancel name the controller, the other messages follow the
+request or the goal's token.
 
-The simulated time is shared through a double in shared memory, written by the simulation every cycle and read
-by the gateway's validation (stamps in the past, stamps far in the future).
-
-The gateway is started as ``python -m ur_sim_driver.gateway.trajectory_gateway`` with the pipe (a socket pair) and the
-shared memory (a memfd) handed over as file descriptors, not through multiprocessing's spawn, which re-imports
-the caller's main module: a user's plain script that builds a UrSimNode without an ``if __name__`` guard would
-start itself again.
+The gateway is started as ``python -m ur_sim_driver.gateway.trajectory_gateway`` with the pipe (a socket pair)
+handed over as a file descriptor, not through multiprocessing's spawn, which re-imports the caller's main module:
+a user's plain script that builds a UrSimNode without an ``if __name__`` guard would start itself again.
 """
 from __future__ import annotations
 
 import collections
-import mmap
-import os
 import queue
 import socket
-import struct
 import subprocess
 import sys
 import threading
@@ -52,8 +49,7 @@ class GatewayConfig:
     """What the gateway process needs to serve the controllers' interfaces (picklable).
 
     Attributes:
-        controllers: the trajectory controllers' names (each its own node, as in ros2_control).
-        active: the names of those active at start.
+        controllers: the trajectory controllers' names (their interfaces are named after them, as in ros2_control).
         namespace: namespace of every interface ('' or '/ur10').
         joints: n controller joint names (with the tf_prefix).
         q_min, q_max, v_max: (n,) joint limits [rad], [rad/s], used only with `strict_limits`.
@@ -66,7 +62,6 @@ class GatewayConfig:
     """
 
     controllers: tuple[str, ...]
-    active: tuple[str, ...]
     namespace: str
     joints: tuple[str, ...]
     q_min: np.ndarray
@@ -107,19 +102,23 @@ class Dropped:
 
 
 @dataclass(frozen=True)
-class Activation:
-    """`controller` was activated (`active`) or deactivated; the gateway answers :class:`Ack` with `seq`."""
+class Admit:
+    """May `controller` take a goal (or, with `topic`, a joint_trajectory message) now? Answered by :class:`Admission`
+    with the same `request` number."""
 
+    request: int
     controller: str
-    active: bool
-    seq: int
+    topic: bool = False
 
 
 @dataclass(frozen=True)
-class Ack:
-    """The gateway applied the :class:`Activation` numbered `seq`."""
+class Admission:
+    """The answer to :class:`Admit` `request`: None, or why the controller refuses (in upstream's words); and the
+    simulated time [s] when it was decided (for the validation of stamps)."""
 
-    seq: int
+    request: int
+    reason: str | None
+    now: float
 
 
 @dataclass(frozen=True)
@@ -152,14 +151,6 @@ class Feedback:
     error: tuple[np.ndarray, np.ndarray]
 
 
-@dataclass(frozen=True)
-class Gate:
-    """The robot cannot move (`reason` names its state) or can again (None): goals and messages are refused
-    while a reason is set, as the driver's controller_stopper leaves the controller inactive."""
-
-    reason: str | None
-
-
 STOP = 'stop'  # sent last: the gateway ends its goals and exits
 
 
@@ -168,30 +159,22 @@ class GatewayLink:
 
     Args:
         config: the gateway's configuration.
-        on_message: called in the receiving thread for every :class:`Start` and :class:`Cancel`.
+        on_message: called in the receiving thread for every message from the gateway.
     """
-
-    _seq = 0
 
     def __init__(self, config: GatewayConfig, on_message: Callable[[object], None]) -> None:
         parent_end, child_end = socket.socketpair()
-        time_fd = os.memfd_create('ur_sim_time')
-        os.ftruncate(time_fd, 8)
-        self._time = mmap.mmap(time_fd, 8)
         self.process = subprocess.Popen(
-            [sys.executable, '-m', 'ur_sim_driver.gateway.trajectory_gateway', str(child_end.fileno()), str(time_fd)],
+            [sys.executable, '-m', 'ur_sim_driver.gateway.trajectory_gateway', str(child_end.fileno())],
             # Its own session: a Ctrl-C (or a test's SIGINT to ur_sim's process group) must not interrupt it while
             # it imports; ur_sim stops it through the pipe, and it exits on its own when the pipe closes.
-            pass_fds=(child_end.fileno(), time_fd), start_new_session=True)
+            pass_fds=(child_end.fileno(),), start_new_session=True)
         child_end.close()
-        os.close(time_fd)
         self._conn = Connection(parent_end.detach())
         self._conn.send(config)
         self._on_message = on_message
         self._outbox: queue.SimpleQueue = queue.SimpleQueue()
         self._closed = threading.Event()
-        self._acks: dict[int, threading.Event] = {}
-        self._acks_lock = threading.Lock()
         # Tokens of the latest goals the simulation ended (Ended, or a granted Canceled), newest last: a script that
         # steps the simulation itself steps until its goal is among them, then waits for the result's delivery.
         self.ended: collections.deque = collections.deque(maxlen=ENDED_KEPT)
@@ -200,31 +183,11 @@ class GatewayLink:
         self._receiver.start()
         self._sender.start()
 
-    def set_sim_time(self, t: float) -> None:
-        """Publish the simulated time [s] to the gateway (every control cycle)."""
-        struct.pack_into('d', self._time, 0, t)
-
     def send(self, message: object) -> None:
         """Queue a message for the gateway; never blocks (the simulation loop calls this)."""
         if isinstance(message, Ended) or (isinstance(message, Canceled) and message.ok):
             self.ended.append(message.token)
         self._outbox.put(message)
-
-    @property
-    def settled(self) -> bool:
-        """True once the gateway has applied every activation sent to it (a goal sent now meets those states)."""
-        with self._acks_lock:
-            return not self._acks
-
-    def activation(self, controller: str, active: bool) -> threading.Event:
-        """Tell the gateway that `controller` was switched; the event is set once it has applied that."""
-        event = threading.Event()
-        with self._acks_lock:
-            self._seq += 1
-            seq = self._seq
-            self._acks[seq] = event
-        self.send(Activation(controller, active, seq))
-        return event
 
     def _send(self) -> None:
         while True:
@@ -242,12 +205,6 @@ class GatewayLink:
                 message = self._conn.recv()
             except (OSError, EOFError):
                 return
-            if isinstance(message, Ack):
-                with self._acks_lock:
-                    event = self._acks.pop(message.seq, None)
-                if event is not None:
-                    event.set()
-                continue
             self._on_message(message)
 
     def close(self, timeout: float = 5.0) -> None:
@@ -262,4 +219,3 @@ class GatewayLink:
             self.process.wait(timeout=timeout)
         self._receiver.join(timeout=timeout)  # the child's end is closed now: recv() has seen EOF
         self._conn.close()
-        self._time.close()

@@ -1,10 +1,12 @@
 """The trajectory controllers' ROS interfaces, in a process of their own (see ``gateway_link.py`` for why).
 
-This process holds one node per trajectory controller (scaled_joint_trajectory_controller,
-joint_trajectory_controller), as in ros2_control, where every controller is a node named after it: each serves
-``~/follow_joint_trajectory`` and subscribes to ``~/joint_trajectory``, validates what arrives, and hands each
-accepted trajectory to the simulation process, which executes it and reports back. A controller that the
-controller manager has deactivated refuses goals and messages with upstream's words.
+This process holds one node, ``ur_sim_trajectory_gateway`` (the controllers' own nodes, named after them as in
+ros2_control, are ur_sim's). For each trajectory controller (scaled_joint_trajectory_controller,
+joint_trajectory_controller, passthrough_trajectory_controller) it serves ``<controller>/follow_joint_trajectory``
+and subscribes to ``<controller>/joint_trajectory``; it asks the simulation whether the controller may take what
+arrives (:class:`~ur_sim_driver.gateway.gateway_link.Admit`: the simulation owns which controller is active and
+whether the robot can move, and answers with upstream's words), validates it, and hands each accepted trajectory
+to the simulation, which executes it and reports back.
 
 Order: goal requests, their acceptance and topic messages are handled one at a time in one mutually
 exclusive callback group, and each accepted trajectory is handed over at acceptance, in that order. So the
@@ -14,12 +16,10 @@ INVALID_GOAL "Current goal preempted by new incoming action.".
 from __future__ import annotations
 
 import faulthandler
-import mmap
+import itertools
 import signal
-import struct
 import sys
 import threading
-import time
 from multiprocessing.connection import Connection
 
 import rclpy
@@ -35,14 +35,13 @@ from ur_sim_driver.errors import TrajectoryError
 from ur_sim_driver.gateway.dds_profile import free_received_samples
 from ur_sim_driver.gateway.gateway_link import (
     STOP,
-    Ack,
-    Activation,
+    Admission,
+    Admit,
     Cancel,
     Canceled,
     Dropped,
     Ended,
     Feedback,
-    Gate,
     GatewayConfig,
     Start,
 )
@@ -59,12 +58,12 @@ from ur_sim_driver.motion.validation import validate_trajectory
 LARGE_TRAJECTORY = 10_000
 # A start stamp this far ahead of the simulated clock is accepted (upstream does) but logged [s].
 FAR_FUTURE = 5.0
-# How long a goal to an inactive controller waits for an activation in flight before it is rejected [s].
-ACTIVATION_GRACE = 0.05
+# How long a goal or message waits for the simulation's Admission [s of wall time]: the simulation answers from
+# its receiving thread at once, so only a simulation that is gone or hung takes this long.
+ADMIT_TIMEOUT = 10.0
+NOT_ANSWERING = 'ur_sim does not answer (shutting down?)'
+NODE_NAME = 'ur_sim_trajectory_gateway'
 _SHUTDOWN = Ended(None, result_codes.INVALID_GOAL, 'ur_sim is shutting down.')
-# Upstream JTC's words while it is inactive (goals; topic messages).
-INACTIVE_GOAL = "Can't accept new action goals. Controller is not running."
-INACTIVE_TOPIC = "Can't accept new commands. subscriber is inactive"  # (logged by the simulation side)
 
 
 class _Waiter:
@@ -78,13 +77,42 @@ class _Waiter:
 
 
 class _Shared:
-    """What the controllers of this process share: the pipe (one sender at a time) and the robot's state."""
+    """What the controllers of this process share: the pipe (one sender at a time) and the questions to the
+    simulation that wait for its answer."""
 
-    def __init__(self, conn: Connection, sim_time: mmap.mmap) -> None:
+    def __init__(self, conn: Connection) -> None:
         self.conn = conn
         self.send_lock = threading.Lock()
-        self.sim_time = sim_time
-        self.refusal: str | None = None  # why the robot cannot move now (from the simulation), or None
+        self._numbers = itertools.count()
+        self._lock = threading.Lock()
+        self._asked: dict[int, list] = {}  # request -> [event, Admission | None]
+
+    def admit(self, controller: str, topic: bool) -> Admission | None:
+        """Ask the simulation whether `controller` may take a goal (or a topic message) now; None if it does not
+        answer within ADMIT_TIMEOUT."""
+        request = next(self._numbers)
+        slot = [threading.Event(), None]
+        with self._lock:
+            self._asked[request] = slot
+        _send(self, Admit(request, controller, topic))
+        slot[0].wait(ADMIT_TIMEOUT)
+        with self._lock:
+            self._asked.pop(request, None)
+        return slot[1]
+
+    def answered(self, admission: Admission) -> None:
+        with self._lock:
+            slot = self._asked.get(admission.request)
+        if slot is not None:
+            slot[1] = admission
+            slot[0].set()
+
+    def end_all(self) -> None:
+        """The simulation is gone: every question ends unanswered."""
+        with self._lock:
+            slots = list(self._asked.values())
+        for slot in slots:
+            slot[0].set()
 
 
 class TrajectoryGateway:
@@ -92,15 +120,14 @@ class TrajectoryGateway:
 
     def __init__(self, node: Node, cfg: GatewayConfig, name: str, shared: _Shared) -> None:
         self.node = node
+        self.log = node.get_logger().get_child(name)
         self.cfg = cfg
         self.name = name
         self._shared = shared
-        self._sim_time = shared.sim_time
         self._lock = threading.Lock()
         self._waiters: dict[bytes, _Waiter] = {}
         self._handles: dict[bytes, object] = {}
         self._pending: dict[int, CommandArrays] = {}  # converted goals between goal callback and acceptance
-        self.active = name in cfg.active
         self.passthrough = name in cfg.passthrough
         ns = cfg.namespace.strip('/')
         base = f'/{ns}/{name}' if ns else f'/{name}'
@@ -114,22 +141,10 @@ class TrajectoryGateway:
             node.create_subscription(JointTrajectory, f'{base}/joint_trajectory', self._on_topic, 10,
                                      callback_group=ordered, raw=True)
 
-    def _wait_active(self, timeout: float) -> bool:
-        """Whether the controller is active, allowing an activation already on its way through the pipe (the
-        controller_stopper restores a controller in the cycle after the robot can move again) to arrive."""
-        deadline = time.monotonic() + timeout
-        while not self.active and time.monotonic() < deadline:
-            time.sleep(0.002)
-        return self.active
-
-    @property
-    def refusal(self) -> str | None:
-        return self._shared.refusal
-
     # ---- validation --------------------------------------------------------------------------------
-    def _validate(self, cmd: CommandArrays, what: str) -> str | None:
+    def _validate(self, cmd: CommandArrays, what: str, now: float) -> str | None:
+        """Why `cmd` is refused by the driver's rules, or None; `now` [s]: the simulated time."""
         cfg = self.cfg
-        (now,) = struct.unpack_from('d', self._sim_time, 0)
         strict = cfg.strict_limits
         # The passthrough controller needs every joint and does not look at the end velocity.
         reason = validate_trajectory(
@@ -138,7 +153,7 @@ class TrajectoryGateway:
             allow_partial=cfg.allow_partial and not self.passthrough,
             allow_nonzero_end_velocity=cfg.allow_nonzero_end_velocity or self.passthrough)
         if reason is None and cmd.header_stamp - now > FAR_FUTURE:
-            self.node.get_logger().warning(
+            self.log.warning(
                 f'{what} starts at header.stamp {cmd.header_stamp:.3f} s, {cmd.header_stamp - now:.1f} s after '
                 f'the simulated time now ({now:.3f} s); it waits until then. A client stamping with its wall '
                 'clock while ur_sim runs on simulated time (use_sim_time:=true for the client) is the likely '
@@ -151,22 +166,22 @@ class TrajectoryGateway:
             traj = goal.trajectory
             cmd = from_points(traj.joint_names, conv.time_to_sec(traj.header.stamp), traj.points)
         # Upstream's JTC rejects goals while inactive, and the controller_stopper deactivates it while the robot
-        # cannot move. (Topic messages are refused by the simulation, which knows the state without delay.)
-        refusal = self.refusal
-        if refusal is not None:  # deactivated by the controller_stopper: name the robot's state
-            reason = f'the controller is not running: {refusal}'
-        elif not self._wait_active(ACTIVATION_GRACE):
-            reason = passthrough.INACTIVE if self.passthrough else INACTIVE_GOAL
+        # cannot move: the simulation, which owns both, says whether this one may take the goal.
+        admission = self._shared.admit(self.name, topic=False)
+        if admission is None:
+            reason = NOT_ANSWERING
+        elif admission.reason is not None:
+            reason = admission.reason
         elif self.passthrough and self._busy():
             reason = passthrough.BUSY
         else:
-            reason = self._validate(cmd, 'FollowJointTrajectory goal')
+            reason = self._validate(cmd, 'FollowJointTrajectory goal', admission.now)
         if reason is None and self.passthrough:
             reason = passthrough.check_goal(cmd, self.cfg.joints, [t.name for t in goal.goal_tolerance])
         if reason is None and goal.multi_dof_trajectory.points:
             reason = 'multi_dof_trajectory is not supported by this controller (it has no multi-DOF joints)'
         if reason is not None:
-            self.node.get_logger().error(f'Rejected FollowJointTrajectory goal: {reason}')
+            self.log.error(f'Rejected FollowJointTrajectory goal: {reason}')
             return GoalResponse.REJECT
         self._pending[id(goal)] = cmd
         return GoalResponse.ACCEPT
@@ -186,7 +201,7 @@ class TrajectoryGateway:
                 self.cfg.defaults, self.cfg.joints, conv.tolerance_specs(goal.path_tolerance),
                 conv.tolerance_specs(goal.goal_tolerance), conv.duration_to_sec(goal.goal_time_tolerance))
             if reason is not None:
-                self.node.get_logger().error(f'Goal tolerances ignored, using the defaults: {reason}')
+                self.log.error(f'Goal tolerances ignored, using the defaults: {reason}')
         large = cmd.count >= LARGE_TRAJECTORY
         self._start(goal_handle, cmd, tolerances)
         if large:
@@ -204,17 +219,21 @@ class TrajectoryGateway:
         goal_handle.execute()
 
     def _on_topic(self, data: bytes) -> None:
-        # Whether the controller is active is decided by the simulation, which knows it without delay (a message
-        # right after the robot can move again meets the controller that the controller_stopper restores).
         try:
             cmd = read_joint_trajectory(data)
         except TrajectoryError as exc:
-            self.node.get_logger().error(f'Dropped JointTrajectory message: {exc}')
+            self.log.error(f'Dropped JointTrajectory message: {exc}')
             self._send(Dropped(self.name))
             return
-        reason = self._validate(cmd, 'JointTrajectory message')
+        admission = self._shared.admit(self.name, topic=True)
+        reason = NOT_ANSWERING if admission is None else admission.reason
         if reason is not None:
-            self.node.get_logger().error(f'Dropped JointTrajectory message: {reason}')
+            self.log.warning(f'Dropped JointTrajectory message: {reason}')
+            self._send(Dropped(self.name))
+            return
+        reason = self._validate(cmd, 'JointTrajectory message', admission.now)
+        if reason is not None:
+            self.log.error(f'Dropped JointTrajectory message: {reason}')
             self._send(Dropped(self.name))
             return
         self._send(Start(None, cmd, None, self.name))
@@ -244,7 +263,7 @@ class TrajectoryGateway:
             threading.Timer(1.0, release_memory).start()
         if waiter.canceled:
             goal_handle.canceled()
-            self.node.get_logger().info('Goal canceled; holding the measured position')
+            self.log.info('Goal canceled; holding the measured position')
             return FollowJointTrajectory.Result(error_code=result_codes.SUCCESSFUL,
                                                 error_string='Goal canceled by the client.')
         ended = waiter.ended
@@ -252,7 +271,7 @@ class TrajectoryGateway:
         if ended.code == result_codes.SUCCESSFUL and not ended.aborted:
             goal_handle.succeed()
         else:
-            self.node.get_logger().warning(f'Goal aborted ({result_codes.NAMES[ended.code]}): {ended.message}')
+            self.log.warning(f'Goal aborted ({result_codes.NAMES[ended.code]}): {ended.message}')
             goal_handle.abort()
         return result
 
@@ -314,13 +333,8 @@ def _receive(shared: _Shared, gateways: dict[str, TrajectoryGateway], stopped: t
             message = shared.conn.recv()
             if message == STOP:
                 break
-            if isinstance(message, Gate):
-                shared.refusal = message.reason
-            elif isinstance(message, Activation):
-                gateway = gateways.get(message.controller)
-                if gateway is not None:
-                    gateway.active = message.active
-                _send(shared, Ack(message.seq))
+            if isinstance(message, Admission):
+                shared.answered(message)
             else:
                 for gateway in gateways.values():
                     if gateway.owns(message.token):
@@ -328,12 +342,13 @@ def _receive(shared: _Shared, gateways: dict[str, TrajectoryGateway], stopped: t
                         break
     except (OSError, EOFError):
         pass
+    shared.end_all()
     for gateway in gateways.values():
         gateway.end_all()
     stopped.set()
 
 
-def run_gateway(conn: Connection, sim_time: mmap.mmap) -> None:
+def run_gateway(conn: Connection) -> None:
     """Serve the controllers' interfaces until the simulation says stop (or its end of the pipe closes)."""
     # The parent stops this process through the pipe; Ctrl-C in a terminal reaches both, and the parent must
     # be the one to decide (it ends the goals first).
@@ -343,19 +358,17 @@ def run_gateway(conn: Connection, sim_time: mmap.mmap) -> None:
     cfg: GatewayConfig = conn.recv()
     profile = free_received_samples()  # a large goal's receive buffer is not kept after it
     rclpy.init(signal_handler_options=SignalHandlerOptions.NO)
-    shared = _Shared(conn, sim_time)
+    shared = _Shared(conn)
     executor = MultiThreadedExecutor(num_threads=4)
-    gateways: dict[str, TrajectoryGateway] = {}
     try:
-        for name in cfg.controllers:
-            node = Node(name, namespace=cfg.namespace or '/')
-            gateways[name] = TrajectoryGateway(node, cfg, name, shared)
-            executor.add_node(node)
+        node = Node(NODE_NAME, namespace=cfg.namespace or '/')
     finally:
         if profile is not None:
-            profile.unlink(missing_ok=True)  # read when the first node was made
-    if intake_error() is not None and gateways:
-        next(iter(gateways.values())).node.get_logger().warning(
+            profile.unlink(missing_ok=True)  # read when the node was made
+    gateways = {name: TrajectoryGateway(node, cfg, name, shared) for name in cfg.controllers}
+    executor.add_node(node)
+    if intake_error() is not None:
+        node.get_logger().warning(
             f'goal requests are converted point by point (slow for long trajectories): {intake_error()}')
     stopped = threading.Event()
     threading.Thread(target=_receive, args=(shared, gateways, stopped), name='gateway_receive', daemon=True).start()
@@ -369,16 +382,14 @@ def run_gateway(conn: Connection, sim_time: mmap.mmap) -> None:
         pass
     finally:
         executor.shutdown(timeout_sec=2.0)
-        for gateway in gateways.values():
-            gateway.node.destroy_node()
+        node.destroy_node()
         rclpy.try_shutdown()
         conn.close()
 
 
 def main() -> None:
-    """``python -m ur_sim_driver.gateway.trajectory_gateway PIPE_FD TIME_FD``, as GatewayLink starts it."""
-    pipe_fd, time_fd = int(sys.argv[1]), int(sys.argv[2])
-    run_gateway(Connection(pipe_fd), mmap.mmap(time_fd, 8))
+    """``python -m ur_sim_driver.gateway.trajectory_gateway PIPE_FD``, as GatewayLink starts it."""
+    run_gateway(Connection(int(sys.argv[1])))
 
 
 if __name__ == '__main__':

@@ -33,6 +33,9 @@ from ur_sim_driver.motion.trajectory import Trajectory, TrajectorySample
 from ur_sim_driver.motion.trajectory_types import SegmentTolerances, TrajectoryPoints
 from ur_sim_driver.robot.speed_scaling import RobotSpeedScaling
 
+# Upstream JTC's words while it is inactive (goals; topic messages).
+INACTIVE_GOAL = "Can't accept new action goals. Controller is not running."
+INACTIVE_TOPIC = "Can't accept new commands. subscriber is inactive"
 PREEMPTED_BY_ACTION = 'Current goal preempted by new incoming action.'
 PREEMPTED_BY_TOPIC = 'Current goal preempted by a new trajectory on the joint_trajectory topic.'
 

@@ -42,7 +42,7 @@ from ur_sim_driver.controllers.tcp_pose_broadcaster import TcpPoseBroadcaster
 from ur_sim_driver.controllers.tool_contact import ToolContactController
 from ur_sim_driver.controllers.ur_configuration import UrConfigurationController
 from ur_sim_driver.errors import UrSimError
-from ur_sim_driver.gateway.gateway_link import Dropped, Gate, GatewayConfig, GatewayLink
+from ur_sim_driver.gateway.gateway_link import Admission, Admit, Dropped, GatewayConfig, GatewayLink
 from ur_sim_driver.gateway.memory import use_mmap_for_large_blocks
 from ur_sim_driver.motion import conversions as conv
 from ur_sim_driver.motion.jtc import TrajectoryController
@@ -109,14 +109,12 @@ class UrSimNode(Node):
         trajectory_names = (ctrl,) if ctrl == UNSCALED_CONTROLLER else (ctrl, UNSCALED_CONTROLLER)
         self._trajectory: dict[str, JointTrajectoryControllerComponent] = {}
         self.gateway = GatewayLink(GatewayConfig(
-            controllers=(*trajectory_names, PassthroughTrajectoryController.name), active=(ctrl,),
+            controllers=(*trajectory_names, PassthroughTrajectoryController.name),
             passthrough=(PassthroughTrajectoryController.name,), namespace=self.cfg.namespace, joints=self.joints,
             q_min=params.q_min, q_max=params.q_max, v_max=params.v_max, strict_limits=self.cfg.strict_limit_checks,
             allow_partial=self.cfg.allow_partial_joints_goal,
             allow_nonzero_end_velocity=self.cfg.allow_nonzero_velocity_at_trajectory_end,
             defaults=self._defaults), self._on_gateway)
-        if self._refusal is not None:
-            self.gateway.send(Gate(self._refusal))
 
         # The driver's controllers and nodes, one module each; the controller manager holds them.
         self.host = Host(self.cfg, self.sim, self._lock, self.robot, self.scaling, self.context)
@@ -182,7 +180,7 @@ class UrSimNode(Node):
 
     # ---- from the gateway process (its receiving thread) -------------------------------------------------------
     def _on_gateway(self, message: object) -> None:
-        """A trajectory, cancel or dropped topic message for one of the trajectory controllers."""
+        """A question, trajectory, cancel or dropped topic message for one of the trajectory controllers."""
         if isinstance(message, Dropped):
             self.commands_received += 1
             return
@@ -195,6 +193,11 @@ class UrSimNode(Node):
             # controller_stopper would have seen it before this message arrived.
             self.robot.update(self.sim.time)
             self._controller_stopper()
+            if isinstance(message, Admit):
+                reason, now = controller.refusal(message.topic), self.sim.time
+        if isinstance(message, Admit):
+            self.gateway.send(Admission(message.request, reason, now))
+            return
         controller.on_gateway(message)
         self.commands_received += 1
 
@@ -294,7 +297,6 @@ class UrSimNode(Node):
                 self._controller_stopper()
             robot_factor, total_factor = self.scaling.factor, self.scaling.total
             self.host.check_waiters()
-        self.gateway.set_sim_time(self.sim.time)
         cycle = Cycle(self._cycle, state.t, conv.time_parts(state.t), state, sample, tau, robot_factor,
                       total_factor, tcp_position, tcp_orientation, wrench)
         for component in self.components:
@@ -317,13 +319,11 @@ class UrSimNode(Node):
 
     def _controller_stopper(self) -> None:
         """Under the lock: when the robot can no longer move, the controllers that command it are deactivated (their
-        goals end and the robot holds), and activated again when it can, as the driver's controller_stopper does;
-        the gateway hears of every change."""
+        goals end and the robot holds), and activated again when it can, as the driver's controller_stopper does."""
         refusal = self.robot.motion_refusal()
         if refusal == self._refusal:
             return
         self._refusal = refusal
-        self.gateway.send(Gate(refusal))
         self.controller_manager.program_state_changed(refusal)
 
     def _publish(self, cycle: Cycle) -> None:
