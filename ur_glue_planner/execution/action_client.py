@@ -8,6 +8,11 @@ result never delivered). Upstream fixed it later (rclpy PRs #1308, #1517, #1519)
 has the fix yet. This subclass does the same: sending and registering happen under a lock, and the executor
 takes responses under it too, so a response is always taken after its future exists.
 
+rclpy also updates its table of goal handles in ``execute`` without a lock: when two threads execute the client's
+data at once (a reentrant callback group on a multi-threaded executor), both can find a finished goal in a status
+message and both delete it; the second raises KeyError in the executor and the rest of that status message (other
+goals' states) is lost. Here ``execute`` runs under a lock too.
+
 A second loss is DDS's: a server drops a response it sends before its response writer has matched the client's
 response reader (rmw_fastrtps waits 100 ms for the match, then logs "client will not receive response").
 ``server_is_ready`` proves only the other direction. ``wait_until_answering`` closes that gap for the result and
@@ -31,6 +36,7 @@ class ActionClient(_RclpyActionClient):
 
     def __init__(self, *args, **kwargs) -> None:
         self._request_lock = threading.RLock()
+        self._execute_lock = threading.Lock()
         super().__init__(*args, **kwargs)
 
     def send_goal_async(self, goal, feedback_callback=None, goal_uuid=None):
@@ -48,6 +54,11 @@ class ActionClient(_RclpyActionClient):
     def take_data(self):
         with self._request_lock:
             return super().take_data()
+
+    async def execute(self, taken_data):
+        # rclpy's execute awaits only a feedback callback: a coroutine callback must not wait for this client's data
+        with self._execute_lock:
+            await super().execute(taken_data)
 
     def wait_until_answering(self, timeout: float = 10.0, resend: float = 1.0) -> None:
         """Block until the server has answered a result request and a cancel request of this client.
