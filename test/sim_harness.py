@@ -1,6 +1,7 @@
 """An in-process ur_sim node plus a client node on a private context, spun by a background executor."""
 from __future__ import annotations
 
+import contextlib
 import threading
 import time
 from collections.abc import Iterator
@@ -27,6 +28,7 @@ from ur_msgs.msg import Analog
 from ur_msgs.srv import SetAnalogOutput, SetIO, SetPayload, SetSpeedSliderFraction
 
 from ur_glue_planner.execution.action_client import ActionClient
+from ur_sim_driver.controllers.base import destroy_node
 from ur_sim_driver.robot.io_bank import SPAN
 from ur_sim_driver.robot.robot_state import PROTECTIVE_STOP, RUNNING
 from ur_sim_driver.ros.node import UrSimNode
@@ -513,14 +515,17 @@ def running_sim(lockstep: bool | None = None, **params) -> Iterator[SimHarness]:
             _open.append(harness)
             yield harness
         finally:
-            if lockstep:
-                _lockstep.pop()
-            if harness is not None:
-                if harness in _open:
-                    _open.remove(harness)
-                harness.close()
-            sim.shutdown()
-            spinner.stop()
-            client.destroy_node()
-            sim.destroy_node()
-            rclpy.try_shutdown(context=ctx)
+            # Every step runs even if one before it raises (a failed test can leave the harness half-closed): a node
+            # left alive keeps its name in the next test's graph.
+            with contextlib.ExitStack() as teardown:  # callbacks run last-registered first
+                teardown.callback(rclpy.try_shutdown, context=ctx)
+                teardown.callback(sim.destroy_node)
+                teardown.callback(destroy_node, client)
+                teardown.callback(spinner.stop)
+                teardown.callback(sim.shutdown)
+                if harness is not None:
+                    teardown.callback(harness.close)
+                    if harness in _open:
+                        _open.remove(harness)
+                if lockstep:
+                    _lockstep.pop()

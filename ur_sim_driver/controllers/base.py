@@ -131,6 +131,16 @@ class Host:
                     start_parameter_services=False)
 
 
+def destroy_node(node: Node) -> None:
+    """Destroy `node` and its action servers and clients: rclpy's destroy_node leaves those alive, and each keeps
+    the node (and its name in the graph of whoever shares its DDS participant) alive until it is destroyed itself."""
+    for waitable in list(node.waitables):
+        destroy = getattr(waitable, 'destroy', None)
+        if destroy is not None:
+            destroy()
+    node.destroy_node()
+
+
 class Component:
     """Base class of an emulated controller or driver node.
 
@@ -169,7 +179,7 @@ class Component:
     def destroy(self) -> None:
         """Release the node (ur_sim is shutting down)."""
         if self.node is not None:
-            self.node.destroy_node()
+            destroy_node(self.node)
             self.node = None
 
     def interfaces(self, cfg: SimConfig) -> tuple[tuple[str, ...], tuple[str, ...]]:
