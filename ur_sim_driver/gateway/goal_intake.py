@@ -18,6 +18,12 @@ conversion is :meth:`GoalIntake._convert`. Handed the taken C request, that
 The C layout this relies on (a request is the goal id, 16 bytes, then the goal, whose first member is the
 trajectory) is checked once per process against rclpy's own conversion of a probe request
 (:func:`goal_intake`); if it does not hold, or a conversion fails, goals are converted by rclpy as before.
+
+Why it reaches into rclpy's private parts (the metaclass capsules, ``ActionServer._handle`` and
+``_is_goal_request_ready``): rclpy converts nested message arrays to Python one object at a time, which is slow
+for large messages (https://github.com/ros2/rclpy/issues/836, open), and unlike subscriptions (``raw=True``) its
+ActionServer has no way to take a request serialized. What it buys is measured in ``bench/bench_tricks.py``
+(docs/performance.md): without it a 100,000-point goal is not accepted within the 1 s the driver's users need.
 """
 from __future__ import annotations
 

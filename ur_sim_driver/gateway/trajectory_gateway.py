@@ -254,9 +254,7 @@ class TrajectoryGateway:
         with self._lock:
             self._waiters.pop(token, None)
             self._handles.pop(token, None)
-        # Drop the request: rclpy keeps the handle until the result expires (15 min).
         large = waiter.points >= LARGE_TRAJECTORY
-        goal_handle._goal_request = None
         if large:
             # Once more a little later: rclpy lets go of the message's last references after this returns.
             release_memory()
