@@ -1,4 +1,5 @@
-"""Run every benchmark module that exists and write its JSON under out/bench/."""
+"""Run every benchmark module that exists (or those named: ``python -m bench sim tricks``) and write its JSON under
+out/bench/."""
 import importlib
 import json
 import pkgutil
@@ -11,6 +12,13 @@ OUT = Path(__file__).resolve().parents[1] / 'out' / 'bench'
 def main() -> int:
     OUT.mkdir(parents=True, exist_ok=True)
     names = [m.name for m in pkgutil.iter_modules([str(Path(__file__).parent)]) if m.name.startswith('bench_')]
+    if sys.argv[1:]:
+        unknown = sorted(set(sys.argv[1:]) - {n.removeprefix('bench_') for n in names})
+        if unknown:
+            print(f'bench: no benchmark {", ".join(unknown)}; choose from '
+                  f'{", ".join(sorted(n.removeprefix("bench_") for n in names))}')
+            return 2
+        names = [n for n in names if n.removeprefix('bench_') in sys.argv[1:]]
     if not names:
         print('bench: no benchmarks yet')
         return 0

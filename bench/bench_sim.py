@@ -142,11 +142,12 @@ def fast_mode_rtf(rounds: int = 5, window: float = 4.0, raw_seconds: float = 2.0
             'ratio_to_raw_median': float(np.median([r['ratio'] for r in rows])), 'rounds': rows}
 
 
-def realtime_periods(seconds: float = 60.0, recorder_priority: int = 40) -> dict:
+def realtime_periods(seconds: float = 60.0, recorder_priority: int = 40, *args: str) -> dict:
     """/joint_states in real-time mode as a client sees it over `seconds`: every message's arrival time, recorded
     by a process of its own (bench/js_recorder.py, under SCHED_FIFO `recorder_priority` where permitted, below
-    ur_sim's loop at its default 50), whose periods give the mean rate, p99 and max."""
-    sim = _SimProcess('-p', 'real_time_factor:=1.0')
+    ur_sim's loop at its default 50), whose periods give the mean rate, p99 and max. `args`: more parameters for
+    ur_sim."""
+    sim = _SimProcess('-p', 'real_time_factor:=1.0', *args)
     with tempfile.TemporaryDirectory() as tmp:
         out = Path(tmp) / 'js.txt'
         warm_up = 5.0  # [s] discovery and start-up, not counted
