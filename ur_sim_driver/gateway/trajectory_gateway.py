@@ -32,6 +32,7 @@ from rclpy.signals import SignalHandlerOptions
 from trajectory_msgs.msg import JointTrajectory
 
 from ur_sim_driver.errors import TrajectoryError
+from ur_sim_driver.gateway.dds_profile import free_received_samples
 from ur_sim_driver.gateway.gateway_link import (
     STOP,
     Admission,
@@ -45,6 +46,7 @@ from ur_sim_driver.gateway.gateway_link import (
     Start,
 )
 from ur_sim_driver.gateway.goal_intake import ArrayGoalActionServer, intake_error
+from ur_sim_driver.gateway.memory import release_memory, trim_heap, use_mmap_for_large_blocks
 from ur_sim_driver.gateway.trajectory_cdr import read_joint_trajectory
 from ur_sim_driver.motion import conversions as conv
 from ur_sim_driver.motion import passthrough, result_codes
@@ -52,6 +54,8 @@ from ur_sim_driver.motion.command_arrays import CommandArrays, from_points
 from ur_sim_driver.motion.tolerances import resolve_tolerances
 from ur_sim_driver.motion.validation import validate_trajectory
 
+# From this many points on, the memory of a received trajectory is handed back to the system when it is done.
+LARGE_TRAJECTORY = 10_000
 # A start stamp this far ahead of the simulated clock is accepted (upstream does) but logged [s].
 FAR_FUTURE = 5.0
 # How long a goal or message waits for the simulation's Admission [s of wall time]: the simulation answers from
@@ -198,7 +202,13 @@ class TrajectoryGateway:
                 conv.tolerance_specs(goal.goal_tolerance), conv.duration_to_sec(goal.goal_time_tolerance))
             if reason is not None:
                 self.log.error(f'Goal tolerances ignored, using the defaults: {reason}')
+        large = cmd.count >= LARGE_TRAJECTORY
         self._start(goal_handle, cmd, tolerances)
+        if large:
+            # Handed over: the taken C request's many small blocks and the arrays were freed in executor
+            # threads' heaps, which keep the pages until trimmed.
+            del cmd
+            trim_heap()
 
     def _start(self, goal_handle, cmd, tolerances) -> None:
         token = bytes(goal_handle.goal_id.uuid)
@@ -227,6 +237,9 @@ class TrajectoryGateway:
             self._send(Dropped(self.name))
             return
         self._send(Start(None, cmd, None, self.name))
+        if cmd.count >= LARGE_TRAJECTORY:
+            del cmd
+            trim_heap()  # the arrays may have been carved from an executor thread's heap: give its pages back
 
     # ---- execution -----------------------------------------------------------------------------------
     def _execute(self, goal_handle) -> FollowJointTrajectory.Result:
@@ -241,6 +254,11 @@ class TrajectoryGateway:
         with self._lock:
             self._waiters.pop(token, None)
             self._handles.pop(token, None)
+        large = waiter.points >= LARGE_TRAJECTORY
+        if large:
+            # Once more a little later: rclpy lets go of the message's last references after this returns.
+            release_memory()
+            threading.Timer(1.0, release_memory).start()
         if waiter.canceled:
             goal_handle.canceled()
             self.log.info('Goal canceled; holding the measured position')
@@ -334,11 +352,17 @@ def run_gateway(conn: Connection) -> None:
     # be the one to decide (it ends the goals first).
     signal.signal(signal.SIGINT, signal.SIG_IGN)
     faulthandler.register(signal.SIGUSR1)  # `kill -USR1 <pid>` prints every thread's stack, for a hang
+    use_mmap_for_large_blocks()
     cfg: GatewayConfig = conn.recv()
+    profile = free_received_samples()  # a large goal's receive buffer is not kept after it
     rclpy.init(signal_handler_options=SignalHandlerOptions.NO)
     shared = _Shared(conn)
     executor = MultiThreadedExecutor(num_threads=4)
-    node = Node(NODE_NAME, namespace=cfg.namespace or '/')
+    try:
+        node = Node(NODE_NAME, namespace=cfg.namespace or '/')
+    finally:
+        if profile is not None:
+            profile.unlink(missing_ok=True)  # read when the node was made
     gateways = {name: TrajectoryGateway(node, cfg, name, shared) for name in cfg.controllers}
     executor.add_node(node)
     if intake_error() is not None:

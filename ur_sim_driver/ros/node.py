@@ -43,6 +43,7 @@ from ur_sim_driver.controllers.tool_contact import ToolContactController
 from ur_sim_driver.controllers.ur_configuration import UrConfigurationController
 from ur_sim_driver.errors import UrSimError
 from ur_sim_driver.gateway.gateway_link import Admission, Admit, Dropped, GatewayConfig, GatewayLink
+from ur_sim_driver.gateway.memory import use_mmap_for_large_blocks
 from ur_sim_driver.motion import conversions as conv
 from ur_sim_driver.motion.jtc import TrajectoryController
 from ur_sim_driver.motion.tolerances import default_tolerances
@@ -80,6 +81,7 @@ class UrSimNode(Node):
             {name: p.value for name, p in self._parameters.items() if name != 'use_sim_time'})
         self._warn_unknown_parameters()
         self.sim = Simulator(self.cfg)
+        use_mmap_for_large_blocks()  # long trajectories' arrays go back to the system when dropped
         # The controller's joints carry the tf_prefix, as in the driver's ur_controllers.yaml.
         self.joints = self.sim.joint_names
         self._defaults = default_tolerances(
