@@ -6,7 +6,7 @@ import pytest
 from sim_harness import running_sim, wait_for
 
 from ur_glue_planner.errors import ClientError
-from ur_glue_planner.execution.client import URClient
+from ur_glue_planner.execution.client import DELIVERY_FACTOR, URClient
 
 PRESET = dict(ur_type='ur10', namespace='/ur10', controller_name='vel_based_pos_traj_controller',
               initial_positions=[0.0] * 6, base_pose=[0.0, 0.0, 1.0, 0.0, 0.0, 0.0])
@@ -93,6 +93,20 @@ def test_the_public_import_path_gives_the_same_client():
     from ur_glue_planner.execution import client as impl
     for name in public.__all__:
         assert getattr(public, name) is getattr(impl, name), name
+
+
+def test_the_start_margin_grows_with_the_slowest_goal_answer(sim_and_client):
+    _, ur = sim_and_client
+    slow = 0.7  # [s] as if a loaded machine had answered a goal this late
+    ur.goal_answers.append((slow, 1))
+    try:
+        now = ur.now()
+        margin = ur.start_time(lead=0.1, delivery=0.3) - now
+        # 0.1 s lead, then the larger of 0.3 s and DELIVERY_FACTOR x the slowest answer, scaled by time_rate() (at
+        # least 1); the joint state that now() reads may be newer by the time start_time reads it again, not older
+        assert margin >= 0.1 + DELIVERY_FACTOR * max(s for s, _ in ur.goal_answers) - 1e-9
+    finally:
+        ur.goal_answers.pop()
 
 
 def test_a_built_goal_is_stamped_when_sent_and_its_answer_time_kept(sim_and_client):

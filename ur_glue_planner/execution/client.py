@@ -40,6 +40,7 @@ from ur_sim_driver.spin_thread import SpinThread
 
 DEFAULT_CONTROLLER = 'scaled_joint_trajectory_controller'
 IDLE_PACE = 0.002  # [s] rest of the client's spinning thread after a callback while nothing runs or records
+DELIVERY_FACTOR = 4.0  # x the slowest goal answer seen so far: a loaded machine gets a margin in proportion
 STATUS_NAMES = {GoalStatus.STATUS_SUCCEEDED: 'succeeded', GoalStatus.STATUS_ABORTED: 'aborted',
                 GoalStatus.STATUS_CANCELED: 'canceled'}
 
@@ -319,8 +320,10 @@ class URClient:
 
     def start_time(self, lead: float = 0.1, delivery: float = 0.3) -> float:
         """A trajectory start stamp safely in the future [s of robot time]: `lead` [s] of robot time plus
-        `delivery` [s] of wall time for the goal to arrive, scaled by `time_rate()`."""
-        return self.now() + lead + delivery * self.time_rate()
+        `delivery` [s] of wall time for the goal to arrive, or DELIVERY_FACTOR x the slowest answer to a goal of
+        this client when that is longer (a loaded machine delivers slowly), scaled by `time_rate()`."""
+        slowest = max((seconds for seconds, _ in self.goal_answers), default=0.0)
+        return self.now() + lead + max(delivery, DELIVERY_FACTOR * slowest) * self.time_rate()
 
     def send_joint_configuration(self, q: Sequence[float], end_time: float, wait: bool = True,
                                  **kwargs) -> GoalOutcome | TrajectoryGoal:

@@ -10,7 +10,7 @@ import time
 from collections.abc import Callable
 
 from ur_glue_planner.execution.bead_listener import BeadListener
-from ur_glue_planner.execution.client import GoalOutcome, URClient
+from ur_glue_planner.execution.client import DELIVERY_FACTOR, GoalOutcome, URClient
 from ur_glue_planner.execution.dispenser_io import DispenserIO
 from ur_glue_planner.execution.switch_timer import SwitchEvent
 from ur_glue_planner.motion.plan import GluePlan
@@ -20,7 +20,6 @@ from ur_glue_planner.report.glue_report import Executed
 Progress = Callable[[str, float, float], None]
 
 BEAD_DELIVERY = 1.0  # [s] of wall time allowed at least for the bead goal to reach the controller before it starts
-DELIVERY_FACTOR = 4.0  # x the slowest goal answer seen so far: a loaded machine gets a margin in proportion
 RECORD_RATE = 50.0  # [Hz] nominal; the report uses every message received (exact stamps)
 MESSAGES = {
     0: 'bead completed',
