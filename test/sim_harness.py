@@ -58,7 +58,80 @@ class Lockstep:
                 self.node.step_once()
 
 
+class Pacer:
+    """Steps a simulation in a thread of its own at the wall-clock pace of real time, for clients that wait on the
+    wall clock (the example scripts, the script client), and holds it still while a message travels to ur_sim
+    (`hold()`, and every `wait_still`) or while a followed client's view of robot time lags (`follow()`).
+
+    A free-running simulation keeps moving while a loaded machine delays a message: under load, messages from a
+    client to the trajectory gateway took up to 3.1 s (Fast DDS's writers send a heartbeat every 3 s by default,
+    after which a reader asks again for a sample it lost), and a topic message of one example arrived after the
+    next goal and preempted it. Paced, a message arrives at the simulated time it was sent at, however long it
+    travels, and a client never falls so far behind that its joint-state queue overflows.
+    """
+
+    LAG = 0.01  # [s] of robot time a followed client may lag: 5 cycles, under its joint-state queue of 10
+
+    def __init__(self, node: UrSimNode) -> None:
+        self.node = node
+        self._holds = 0
+        self._lock = threading.Lock()
+        self._views: list = []  # callables giving a client's newest robot time [s]
+        self._stop = threading.Event()
+        self._thread = threading.Thread(target=self._run, name='pacer', daemon=True)
+
+    def start(self) -> Pacer:
+        self._thread.start()
+        return self
+
+    def stop(self) -> None:
+        self._stop.set()
+        if self._thread.is_alive():
+            self._thread.join(timeout=TIMEOUT)
+
+    def follow(self, now) -> None:
+        """Step only while `now()` (a client's newest robot time [s]) is within LAG of the simulated time."""
+        self._views.append(now)
+
+    def unfollow(self, now) -> None:
+        self._views.remove(now)
+
+    @contextmanager
+    def hold(self) -> Iterator[None]:
+        """No cycle is stepped inside this block."""
+        with self._lock:
+            self._holds += 1
+        try:
+            yield
+        finally:
+            with self._lock:
+                self._holds -= 1
+
+    def _may_step(self) -> bool:
+        if self._holds:
+            return False
+        t = self.node.sim.time - self.node.sim.control_dt  # the stamp of the last cycle published
+        return all(view() >= t - self.LAG for view in self._views)
+
+    def _run(self) -> None:
+        dt = self.node.sim.control_dt
+        next_wall = time.perf_counter()
+        while not self._stop.is_set():
+            if not self._may_step():
+                time.sleep(0.0005)  # polling a condition that DDS delivery changes; no cycle is lost by it
+                next_wall = time.perf_counter()  # robot time resumes at the wall clock's pace, without a burst
+                continue
+            self.node.step_once()
+            next_wall += dt
+            delay = next_wall - time.perf_counter()
+            if delay > 0.0:
+                time.sleep(delay)
+            elif delay < -0.1:
+                next_wall = time.perf_counter()  # a loaded machine: robot time runs slower, never in bursts
+
+
 _lockstep: list[Lockstep] = []  # the running lockstep simulations, innermost last
+_paced: list[Pacer] = []  # the running paced simulations, innermost last
 _open: list[SimHarness] = []  # the harnesses of running simulations, oldest first
 
 
@@ -79,7 +152,7 @@ def wait_for(condition, timeout: float = TIMEOUT, what: str = 'condition') -> No
                 raise TimeoutError(f'timed out after {timeout:.0f} s of simulated time waiting for {what}')
             lockstep.step()
         return
-    wait_still(condition, timeout, what)
+    _poll(condition, timeout, what)
 
 
 def wait_answer(future, what: str = 'the answer', timeout: float = TIMEOUT):
@@ -87,8 +160,8 @@ def wait_answer(future, what: str = 'the answer', timeout: float = TIMEOUT):
     service waits for (a controller switch is applied in a cycle; the dashboard's power on and brake release wait for
     the robot mode): it takes effect at the same simulated time however long the request and answer travel. The
     deadline is wall time, a hang guard."""
-    if not _lockstep:
-        wait_still(future.done, timeout, what)
+    if not _lockstep:  # free or paced: the simulation runs on (a service may wait for cycles)
+        _poll(future.done, timeout, what)
         return future.result()
     lockstep = _lockstep[-1]
     manager, host = lockstep.node.controller_manager, lockstep.node.host
@@ -103,9 +176,21 @@ def wait_answer(future, what: str = 'the answer', timeout: float = TIMEOUT):
     return future.result()
 
 
+@contextmanager
+def holding() -> Iterator[None]:
+    """A paced simulation (the innermost) takes no step inside this block; a lockstep one steps only in waits."""
+    with _paced[-1].hold() if _paced else contextlib.nullcontext():
+        yield
+
+
 def wait_still(condition, timeout: float = TIMEOUT, what: str = 'condition') -> None:
-    """Wait until `condition()` is true without stepping a lockstep simulation: for delivery (discovery, a goal's
-    answer, a message reaching ur_sim). The deadline is wall time, a guard against a hang."""
+    """Wait until `condition()` is true holding the simulation still (lockstep or paced): for delivery (discovery, a
+    goal's answer, a message reaching ur_sim). The deadline is wall time, a guard against a hang."""
+    with holding():
+        _poll(condition, timeout, what)
+
+
+def _poll(condition, timeout: float, what: str) -> None:
     deadline = time.monotonic() + timeout
     while not condition():
         if time.monotonic() > deadline:
@@ -186,6 +271,7 @@ class SimHarness:
                                    lambda: controller.speed_scaling_received, 'the speed_scaling_input message')
         self.recording: Recording | None = None
         self.keeper: RobotKeeper | None = None  # set by running_sim: brings the robot back after each test
+        self.pacer: Pacer | None = None  # set by running_sim for a paced simulation
         self._js_topic = p('joint_states')
         self._scaling_topic = p('speed_scaling_state_broadcaster/speed_scaling')
         self._recorder: Node | None = None
@@ -278,13 +364,7 @@ class SimHarness:
         """Send a goal (to `client`, default the scaled trajectory controller's action) and wait for the server's
         answer, and for an accepted goal's arrival at its controller, with a lockstep simulation held still;
         returns the goal handle (check .accepted)."""
-        before = self.sim.commands_received
-        future = (client or self.action).send_goal_async(goal, feedback_callback=feedback)
-        wait_still(future.done, what='the goal response')
-        handle = future.result()
-        if handle.accepted:
-            wait_still(lambda: self.sim.commands_received > before, what='the goal at its controller')
-        return handle
+        return _send_held(self.sim, (client or self.action).send_goal_async, goal, feedback_callback=feedback).result()
 
     def cancel(self, handle):
         """Ask to cancel a goal of a trajectory controller and return the CancelGoal response, holding a lockstep
@@ -455,12 +535,36 @@ class _HandedOver:
         self._what = what
 
     def publish(self, msg) -> None:
-        before = self._handled()
-        self._publisher.publish(msg)
-        wait_still(lambda: self._handled() > before, what=self._what)
+        with holding():  # from before the message leaves: a paced simulation must not step while it travels
+            before = self._handled()
+            self._publisher.publish(msg)
+            wait_still(lambda: self._handled() > before, what=self._what)
 
     def __getattr__(self, name):
         return getattr(self._publisher, name)
+
+
+def _send_held(sim: UrSimNode, send, goal, **kwargs):
+    """`send(goal, **kwargs)` (an action client's send_goal_async) and wait for the answer, and for an accepted
+    goal's arrival at its controller, with the simulation held still; returns the (done) future."""
+    with holding():
+        before = sim.commands_received
+        future = send(goal, **kwargs)
+        wait_still(future.done, what='the goal response')
+        if future.result().accepted:
+            wait_still(lambda: sim.commands_received > before, what='the goal at its controller')
+    return future
+
+
+def hand_over(harness: SimHarness, ur) -> None:
+    """Make a URClient's trajectory publish and goal send (`ur`, ur_glue_planner's script client) return only once
+    ur_sim has the message, the simulation held still meanwhile, as the harness's own do: with a paced simulation
+    the scripts' stamps (robot time plus a margin) then hold however long a loaded machine takes to deliver.
+    Reaches into the client's publisher and action client: the client offers no such hook, and users need none."""
+    sim = harness.sim
+    ur._topic = _HandedOver(ur._topic, lambda: sim.commands_received, 'the joint_trajectory message at ur_sim')
+    send = ur._action.send_goal_async
+    ur._action.send_goal_async = lambda goal, **kwargs: _send_held(sim, send, goal, **kwargs)
 
 
 def _flatten(params: dict, prefix: str = '') -> dict:
@@ -487,19 +591,23 @@ def yaml_params(path) -> dict:
 
 
 @contextmanager
-def running_sim(lockstep: bool | None = None, **params) -> Iterator[SimHarness]:
+def running_sim(lockstep: bool | None = None, paced: bool = False, **params) -> Iterator[SimHarness]:
     """ur_sim with a client, on a private context.
 
     By default in lockstep (:class:`Lockstep`): the simulation advances only while the test waits for something
-    the robot does. With `real_time_factor` given (the wall clock is the subject) it runs free, paced to the wall
-    clock; `lockstep=False` runs it free and as fast as possible.
+    the robot does. `paced`: stepped at real time's pace but held still during delivery (:class:`Pacer`), for
+    clients that wait on the wall clock. With `real_time_factor` given (the wall clock is the subject) it runs
+    free, paced to the wall clock; `lockstep=False` runs it free and as fast as possible.
     """
+    if paced:
+        lockstep = False
+        params.setdefault('real_time_factor', 1.0)
     if lockstep is None:
         lockstep = 'real_time_factor' not in params
     params.setdefault('real_time_factor', 0.0)
     with ros_context() as ctx:
         sim = UrSimNode(context=ctx, parameter_overrides=[_param(k, v) for k, v in _flatten(params).items()],
-                        start=not lockstep)
+                        start=not (lockstep or paced))
         client = Node('test_client', context=ctx)
         executor = MultiThreadedExecutor(num_threads=4, context=ctx)
         for node in sim.nodes():
@@ -509,8 +617,12 @@ def running_sim(lockstep: bool | None = None, **params) -> Iterator[SimHarness]:
         harness = None
         if lockstep:
             _lockstep.append(Lockstep(sim))
+        pacer = Pacer(sim).start() if paced else None
+        if pacer is not None:
+            _paced.append(pacer)
         try:
             harness = SimHarness(sim, client)
+            harness.pacer = pacer
             harness.keeper = RobotKeeper(harness)
             _open.append(harness)
             yield harness
@@ -523,6 +635,9 @@ def running_sim(lockstep: bool | None = None, **params) -> Iterator[SimHarness]:
                 teardown.callback(destroy_node, client)
                 teardown.callback(spinner.stop)
                 teardown.callback(sim.shutdown)
+                if pacer is not None:
+                    teardown.callback(pacer.stop)
+                    teardown.callback(_paced.remove, pacer)
                 if harness is not None:
                     teardown.callback(harness.close)
                     if harness in _open:

@@ -3,7 +3,7 @@ import time
 
 import numpy as np
 import pytest
-from sim_harness import running_sim, wait_for
+from sim_harness import hand_over, running_sim, wait_for
 
 from ur_glue_planner.errors import ClientError
 from ur_glue_planner.execution.client import DELIVERY_FACTOR, URClient
@@ -14,13 +14,15 @@ PRESET = dict(ur_type='ur10', namespace='/ur10', controller_name='vel_based_pos_
 
 @pytest.fixture(scope='module')
 def sim_and_client():
-    # In real time, as against a robot: the client library under test waits on its own (wall-clock) deadlines and
-    # samples the joint states it has received; as fast as possible, a loaded machine's DDS delay was tenths of a
-    # simulated second, and a 0.5 s recording caught a third of a 1 s motion.
-    with running_sim(real_time_factor=1.0, **PRESET) as h:
+    # At real time's pace, as against a robot: the client library under test waits on its own (wall-clock)
+    # deadlines and samples the joint states it has received. Paced, with its messages handed over and the client
+    # followed: a loaded machine's DDS delays (up to 3 s seen) then change no stamp's margin and drop no joint state.
+    with running_sim(paced=True, **PRESET) as h:
         client = URClient(namespace='/ur10', controller_name='vel_based_pos_traj_controller',
                           context=h.client.context, node_name='test_ur_client')
         try:
+            h.pacer.follow(client.now)
+            hand_over(h, client)
             yield h, client
         finally:
             client.close()

@@ -4,7 +4,7 @@ from pathlib import Path
 
 import numpy as np
 import pytest
-from sim_harness import running_sim
+from sim_harness import hand_over, running_sim
 
 sys.path.insert(0, str(Path(__file__).resolve().parents[1] / 'examples'))
 import seed2_action_blocking  # noqa: E402
@@ -20,12 +20,15 @@ PRESET = dict(ur_type='ur10', namespace='/ur10', controller_name='vel_based_pos_
 
 @pytest.fixture(scope='module')
 def ur():
-    # In real time, as a user runs them: the examples stamp their trajectories 1 s of wall time ahead and wait on the
-    # client library's own (wall-clock) deadlines; as fast as possible, a message delayed by a loaded machine
-    # arrived after its whole trajectory's time and was dropped (task 12 never moved, under pytest-xdist).
-    with running_sim(real_time_factor=1.0, **PRESET) as h:
+    # As a user runs them, at real time's pace: the examples stamp their trajectories 1 s of robot time ahead and
+    # wait on the client library's own (wall-clock) deadlines. Paced, and with the client's messages handed over:
+    # a loaded machine delayed a topic message by 3 s (DDS recovered a lost sample) while a free-running
+    # simulation moved on, and it preempted the next example's goal.
+    with running_sim(paced=True, **PRESET) as h:
         client = seed.connect(context=h.client.context, node_name='example_client')
         try:
+            h.pacer.follow(client.now)
+            hand_over(h, client)
             yield client
         finally:
             client.close()
