@@ -3,7 +3,7 @@ import time
 
 import numpy as np
 import pytest
-from sim_harness import hand_over, running_sim, wait_for
+from sim_harness import hand_over, running_sim, wait_for, wait_still
 
 from ur_glue_planner.errors import ClientError
 from ur_glue_planner.execution.client import DELIVERY_FACTOR, URClient
@@ -143,3 +143,14 @@ def test_the_spinning_thread_rests_only_while_nothing_runs_or_records(sim_and_cl
     assert ur._pace() == 0.0 or goal.done  # feedback and the result are not held up
     assert goal.wait(timeout=30).succeeded
     assert ur._pace() == IDLE_PACE
+
+
+def test_a_closed_client_leaves_the_graph(sim_and_client):
+    h, _ = sim_and_client
+    ur = URClient(namespace='/ur10', controller_name='vel_based_pos_traj_controller', context=h.client.context,
+                  node_name='short_lived_client')
+    try:
+        wait_still(lambda: 'short_lived_client' in h.client.get_node_names(), what='the client in the graph')
+    finally:
+        ur.close()
+    wait_still(lambda: 'short_lived_client' not in h.client.get_node_names(), what='the client gone from the graph')

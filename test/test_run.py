@@ -1,8 +1,13 @@
-"""The pure parts of running a plan (execution/run.py): the bead's delivery margin and the result messages."""
+"""The pure parts of running a plan (execution/run.py and the client's delivery margin): the bead's delivery
+margin and the result messages."""
 import pytest
 
-from ur_glue_planner.execution.client import GoalOutcome
-from ur_glue_planner.execution.run import BEAD_DELIVERY, DELIVERY_FACTOR, MESSAGES, bead_delivery, describe
+from ur_glue_planner.execution.client import DELIVERY_FACTOR, GoalOutcome, delivery_margin
+from ur_glue_planner.execution.run import BEAD_DELIVERY, MESSAGES, describe
+
+
+def bead_delivery(answers, points):
+    return delivery_margin(answers, BEAD_DELIVERY, points)
 
 
 def test_bead_delivery_is_the_floor_on_a_quick_machine():

@@ -160,6 +160,14 @@ class TrajectoryGoal:
         return GoalOutcome(r.result.error_code, r.result.error_string, STATUS_NAMES.get(r.status, str(r.status)))
 
 
+def delivery_margin(answers: Sequence[tuple[float, int]], delivery: float, points: int = 1) -> float:
+    """Wall time [s] to allow for a goal of `points` points to reach the controller: `delivery`, or
+    DELIVERY_FACTOR x the slowest of the earlier goals' `answers` (seconds, points), each scaled up to `points`,
+    when that is longer. A loaded machine answers slowly, and a long goal takes longer to deliver and check."""
+    worst = max((seconds * max(1.0, points / max(n, 1)) for seconds, n in answers), default=0.0)
+    return max(delivery, DELIVERY_FACTOR * worst)
+
+
 class URClient:
     """Connection to a UR driver (or ur_sim): joint states, the trajectory topic and the FollowJointTrajectory action.
 
@@ -318,12 +326,11 @@ class URClient:
         (w0, t0), (w1, t1) = history[0], history[-1]
         return max(1.0, (t1 - t0) / (w1 - w0))
 
-    def start_time(self, lead: float = 0.1, delivery: float = 0.3) -> float:
-        """A trajectory start stamp safely in the future [s of robot time]: `lead` [s] of robot time plus
-        `delivery` [s] of wall time for the goal to arrive, or DELIVERY_FACTOR x the slowest answer to a goal of
-        this client when that is longer (a loaded machine delivers slowly), scaled by `time_rate()`."""
-        slowest = max((seconds for seconds, _ in self.goal_answers), default=0.0)
-        return self.now() + lead + max(delivery, DELIVERY_FACTOR * slowest) * self.time_rate()
+    def start_time(self, lead: float = 0.1, delivery: float = 0.3, points: int = 1) -> float:
+        """A trajectory start stamp safely in the future [s of robot time]: `lead` [s] of robot time plus the
+        `delivery_margin` [s of wall time] for a goal of `points` points to arrive, scaled by `time_rate()`."""
+        margin = delivery_margin(self.goal_answers, delivery, points)
+        return self.now() + lead + margin * self.time_rate()
 
     def send_joint_configuration(self, q: Sequence[float], end_time: float, wait: bool = True,
                                  **kwargs) -> GoalOutcome | TrajectoryGoal:
@@ -408,6 +415,8 @@ class URClient:
     def close(self) -> None:
         """Stop spinning and release the node (and the private context)."""
         self._spinner.stop()
+        # rclpy's destroy_node leaves action clients alive, and each would keep the node in the graph.
+        self._action.destroy()
         self.node.destroy_node()
         if self._own_context:
             rclpy.try_shutdown(context=self.context)

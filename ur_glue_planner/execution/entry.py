@@ -23,6 +23,6 @@ def start_ros(node_name: str, argv: list[str] | None) -> tuple[dict[str, Any], t
     for sig in (signal.SIGINT, signal.SIGTERM):
         signal.signal(sig, lambda *_: stop.set())
     node = Node(node_name, allow_undeclared_parameters=True, automatically_declare_parameters_from_overrides=True)
-    params = {name: p.value for name, p in node._parameters.items()}
+    params = {name: p.value for name, p in node.get_parameters_by_prefix('').items()}
     node.destroy_node()
     return params, stop

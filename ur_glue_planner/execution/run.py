@@ -10,7 +10,7 @@ import time
 from collections.abc import Callable
 
 from ur_glue_planner.execution.bead_listener import BeadListener
-from ur_glue_planner.execution.client import DELIVERY_FACTOR, GoalOutcome, URClient
+from ur_glue_planner.execution.client import GoalOutcome, URClient
 from ur_glue_planner.execution.dispenser_io import DispenserIO
 from ur_glue_planner.execution.switch_timer import SwitchEvent
 from ur_glue_planner.motion.plan import GluePlan
@@ -63,14 +63,6 @@ def _print(text: str) -> None:
     print(text, flush=True)
 
 
-def bead_delivery(answers: list[tuple[float, int]], points: int) -> float:
-    """Wall time [s] to allow for the delivery of a bead goal of `points` points: BEAD_DELIVERY, or
-    DELIVERY_FACTOR x the slowest answer to an earlier goal (seconds, points), scaled up to `points`, when that
-    is longer. Several jobs sharing the cores answer slowly, and a long goal takes longer to deliver and check."""
-    worst = max((seconds * max(1.0, points / max(n, 1)) for seconds, n in answers), default=0.0)
-    return max(BEAD_DELIVERY, DELIVERY_FACTOR * worst)
-
-
 def dispenser_events(plan: GluePlan) -> list[SwitchEvent]:
     """The plan's gun switching as events on the bead segment's trajectory clock."""
     d = plan.dispense
@@ -113,8 +105,8 @@ def execute(ur: URClient, plan: GluePlan, stop: threading.Event, log: Callable[[
             if seg.name == 'bead':
                 # The bead's start is fixed in advance (the gun switches on its clock): a stamp ahead, with a
                 # margin for the goal's delivery [s of wall time] that grows with the answer times seen so far.
-                delivery = bead_delivery(ur.goal_answers, len(seg.times))
-                t0 = start = ur.start_time(lead=0.1 + early, delivery=delivery)
+                t0 = start = ur.start_time(lead=0.1 + early, delivery=BEAD_DELIVERY, points=len(seg.times))
+                ahead = start - ur.now()  # [s] of robot time
             else:
                 # The moves around it start on arrival: a stamp that a slow delivery put in the past would make
                 # the controller sample the trajectory past its start, a jump that aborts the goal.
@@ -132,7 +124,7 @@ def execute(ur: URClient, plan: GluePlan, stop: threading.Event, log: Callable[[
             goal = ur.send_goal(request, start_time=start, wait=False, feedback_callback=feedback)
             if seg.name == 'bead':
                 log(f'  accepted {1e3 * ur.goal_answers[-1][0]:.0f} ms after sending, its start stamped '
-                    f'{delivery:.1f} s of wall time ahead')
+                    f'{ahead:.1f} s ahead')
             while not goal.done:
                 if stop.is_set():
                     log(f'\ninterrupted: cancelling the {seg.name} goal')

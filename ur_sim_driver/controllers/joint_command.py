@@ -51,6 +51,12 @@ class JointCommandController(Component, JointCommander):
         super().__init__()
         self.stop_reason: str | None = None
 
+    def robot_refusal(self) -> str | None:
+        """Under the lock: why the robot's state keeps this controller from taking a goal now, or None (the
+        controller_stopper keeps a controller inactive while the robot cannot move, so this comes first)."""
+        refusal = self.host.robot.motion_refusal()
+        return None if refusal is None else f'the controller is not running: {refusal}'
+
 
 class HoldPosition(JointCommander):
     """The robot without an active joint controller: it holds the measured position where the last one left."""

@@ -116,12 +116,10 @@ class JointTrajectoryControllerComponent(JointCommandController):
     def refusal(self, topic: bool) -> str | None:
         """Under the lock: why this controller refuses a goal (or a topic message) now, or None; the robot's state
         first (the controller_stopper keeps the controller inactive while the robot cannot move)."""
-        refusal = self.host.robot.motion_refusal()
-        if refusal is not None:
-            return f'the controller is not running: {refusal}'
-        if not self.active:
-            return INACTIVE_TOPIC if topic else INACTIVE_GOAL
-        return None
+        refusal = self.robot_refusal()
+        if refusal is None and not self.active:
+            refusal = INACTIVE_TOPIC if topic else INACTIVE_GOAL
+        return refusal
 
     def command(self, state: ArmState, period: float) -> tuple[TrajectorySample, np.ndarray | None]:
         sample, outcome = self.core.update(state.t, period, state.q, state.qd)

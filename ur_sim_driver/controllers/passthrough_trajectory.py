@@ -87,10 +87,8 @@ class PassthroughTrajectoryController(JointCommandController):
 
     def refusal(self, topic: bool) -> str | None:
         """Under the lock: why this controller refuses a goal now, or None (it has no topic: `topic` is unused)."""
-        refusal = self.host.robot.motion_refusal()
-        if refusal is not None:
-            return f'the controller is not running: {refusal}'
-        return None if self.active else INACTIVE
+        refusal = self.robot_refusal()
+        return refusal if refusal is not None or self.active else INACTIVE
 
     def command(self, state: ArmState, period: float) -> tuple[TrajectorySample, np.ndarray | None]:
         goal = self._goal
