@@ -1,4 +1,9 @@
 """DashboardServer: the robot's dashboard answers (wording of UR's dashboard server) and their effect."""
+import json
+import zipfile
+
+import pytest
+
 from ur_sim_driver.robot.dashboard_server import UNLOCK_REFUSED, DashboardServer
 from ur_sim_driver.robot.robot_state import (
     BRAKE_RELEASE_TIME,
@@ -6,6 +11,7 @@ from ur_sim_driver.robot.robot_state import (
     UNLOCK_DELAY,
     RobotState,
 )
+from ur_sim_driver.robot.software import SoftwareVersion
 
 
 def server(**kw) -> DashboardServer:
@@ -96,3 +102,72 @@ def test_protective_stop_unlock_and_restart_safety():
     assert answer(s, 'restart safety') == 'Restarting safety'
     assert answer(s, 'robotmode') == 'Robotmode: POWER_OFF'
     assert answer(s, 'shutdown') == 'Shutting down'
+
+
+def versioned(ur_type: str, files=None, version=None) -> DashboardServer:
+    return DashboardServer(RobotState(), ur_type, version, files)
+
+
+def test_each_series_knows_its_own_commands_only():
+    e, cb3 = versioned('ur10e'), versioned('ur10')
+    assert answer(e, 'PolyscopeVersion') == 'URSoftware 5.12.6.0 (simulated)'
+    assert answer(cb3, 'PolyscopeVersion') == 'URSoftware 3.15.8.0 (simulated)'
+    assert answer(e, 'get robot model') == answer(cb3, 'get robot model') == 'UR10'  # no 'e' in the answer
+    assert answer(e, 'get serial number').startswith('20') and answer(e, 'get serial number').isdigit()
+    for line in ('safetystatus', 'get operational mode', 'is in remote control', 'clear operational mode',
+                 'set operational mode manual'):
+        assert answer(cb3, line) == f"could not understand: '{line}'"
+        assert not answer(e, line).startswith('could not understand')
+    for line in ('getUserRole', 'setUserRole operator'):
+        assert answer(e, line) == f"could not understand: '{line}'"
+        assert not answer(cb3, line).startswith('could not understand')
+    old = versioned('ur5e', version=SoftwareVersion(5, 5, 0))
+    assert answer(old, 'get serial number') == "could not understand: 'get serial number'"
+    assert old.handle('get serial number').refusal == 'software 5.5.0.0 does not know it'
+
+
+def test_operational_mode_is_set_and_reported():
+    s = versioned('ur5e')
+    assert answer(s, 'get operational mode') == 'AUTOMATIC'
+    assert answer(s, 'set operational mode MANUAL') == "Operational mode 'MANUAL' is set"
+    assert answer(s, 'get operational mode') == 'MANUAL'
+    assert answer(s, 'clear operational mode').endswith("Current operational mode: 'MANUAL'.")
+    reply = s.handle('set operational mode sideways')
+    assert reply.answer == "Failed setting operational mode: 'sideways'"
+    assert reply.refusal == "operational mode 'sideways' is not one of manual, automatic"
+    assert answer(s, 'get operational mode') == 'MANUAL'
+
+
+@pytest.mark.parametrize('role', ['PROGRAMMER', 'OPERATOR', 'NONE', 'LOCKED', 'RESTRICTED'])
+def test_a_cb3_takes_every_user_role(role):
+    s = versioned('ur5')
+    assert answer(s, f'setUserRole {role}') == f'Setting user role: {role}'
+    assert answer(s, 'getUserRole') == role
+
+
+def test_a_bad_user_role_is_refused_and_the_role_kept():
+    s = versioned('ur5')
+    reply = s.handle('setUserRole admin')
+    assert reply.answer == "Failed setting user role: 'admin'" and 'programmer, operator' in reply.refusal
+    assert answer(s, 'getUserRole') == 'PROGRAMMER'
+
+
+def test_flight_reports_and_support_files_are_written_to_the_robots_files(tmp_path):
+    s = versioned('ur5e', tmp_path)
+    first, second = answer(s, 'generate flight report'), answer(s, 'generate flight report controller')
+    assert first.startswith('Flight Report generated with id: ') and first != second
+    report_id = first.rsplit(' ', 1)[1]
+    report = json.loads((tmp_path / 'flightreports' / f'{report_id}.json').read_text())
+    assert (report['id'], report['type'], report['robot_model']) == (report_id, 'system', 'UR5')
+    reply = s.handle('generate flight report weekly')
+    assert reply.answer.startswith('Flight Report generation failed')
+    assert 'controller, software, system' in reply.refusal
+    done = answer(s, 'generate support file .')
+    assert done.startswith('Completed successfully: ur_20')
+    with zipfile.ZipFile(tmp_path / done.split(': ', 1)[1]) as archive:
+        assert 'flight_report.json' in archive.namelist()
+    (tmp_path / 'usb').mkdir()
+    assert answer(s, 'generate support file usb').startswith('Completed successfully: ')
+    for outside in ('..', '/../..', 'missing'):
+        reply = s.handle(f'generate support file {outside}')
+        assert reply.answer.startswith('Support file generation failed') and reply.refusal

@@ -41,6 +41,50 @@ UPSTREAM_HASHES = {
         'RIHS01_c3e561a6e8cc7b9d577d8065c783038e51f6950cbe9bed67fb117a3e2e04d8f1',
     'controller_manager_msgs/srv/ListControllerTypes':
         'RIHS01_873e8d2bb81b8b5903ca736d299ba959f929efec4b4a18d17354b8b322822e05',
+    # issue 22 (computed from the upstream IDL: ur_dashboard_msgs at the driver commit a16a268,
+    # controller_manager_msgs 4.46.0, tf2_msgs of geometry2 jazzy)
+    'ur_dashboard_msgs/msg/OperationalMode': 'RIHS01_8aef190ff9d8aa99df44a561cf4e312d83599272bf7979c2af0c53c8d1856a2f',
+    'ur_dashboard_msgs/msg/ProgramInformation':
+        'RIHS01_27ddd344acddc21cb5ebe4395084e488ffb70c32a6c76eef072326b0340f94f4',
+    'ur_dashboard_msgs/msg/ProgramState': 'RIHS01_20e09606e4cba20cbe31680918f25c770a2c46afc44ca91f0cb330559333ed76',
+    'ur_dashboard_msgs/msg/SafetyStatus': 'RIHS01_355caf141b54cde62b4c48c0ff8a846183e2a37a1ae383c23fac70fcc7cef95d',
+    'ur_dashboard_msgs/msg/UserRole': 'RIHS01_ef2323bcf3c0b5ccae2e88e036f7b55d1249a0a78eb7dd23c5aac1ee01334d40',
+    'ur_dashboard_msgs/msg/VersionInformation':
+        'RIHS01_910ef49f3108fa14576ff248051d82b7feeebf2f047cafa472efd784d897446f',
+    'ur_dashboard_msgs/srv/DownloadProgram': 'RIHS01_2eb188a584fc569c287bdf0799a0fa56611c66d14c968416d9b306aa9db6b137',
+    'ur_dashboard_msgs/srv/GenerateFlightReport':
+        'RIHS01_281d95be0f701e2798a983b3064341ee93145d2d1bf2607ed4079b5ca8727d3d',
+    'ur_dashboard_msgs/srv/GenerateSupportFile':
+        'RIHS01_b818b29ac1d8e617d79e7c3b0c1deba2c0e0f94a66fd4c2e3718e0ead7f186f2',
+    'ur_dashboard_msgs/srv/GetOperationalMode':
+        'RIHS01_06a6bdbb60cb93cfd911c28358f4792ae5b885468041b63e10945b359aa96bae',
+    'ur_dashboard_msgs/srv/GetPolyScopeVersion':
+        'RIHS01_ce0aaf85c7062fdee29a4aa8081aaba14e4c6436adca0b1ffae196d4e633be2c',
+    'ur_dashboard_msgs/srv/GetPrograms': 'RIHS01_2a4e9c6b1a2f8861012ef52e36673106470a5cb732e0f3367a7169c4e2250e3b',
+    'ur_dashboard_msgs/srv/GetRobotModel': 'RIHS01_0f0ea4fec0cb4c0f20983173f28ab9fe8b4684714816f7aec1f57b70442ef61b',
+    'ur_dashboard_msgs/srv/GetSafetyStatus': 'RIHS01_1b7c685d8c10ae5b26432ab8ec2aca9a81af5e52f4b93c6ca71de1f5ebca8661',
+    'ur_dashboard_msgs/srv/GetSerialNumber': 'RIHS01_2cda162b32352c84c7a7a07e68d1378db74f6d73a624843d1b5cb0d1f6447cc3',
+    'ur_dashboard_msgs/srv/GetUserRole': 'RIHS01_d55792c1d43380f6898d535c4efb5ece11da009f47114b321e8e8edc6bd83da3',
+    'ur_dashboard_msgs/srv/IsProgramSaved': 'RIHS01_4333686bb61da1963f7f8b9a4ba0299263b8ed329c6a161487d19b05ed24d351',
+    'ur_dashboard_msgs/srv/SetOperationalMode':
+        'RIHS01_75a34fcb9acf5deb450f5be628701673b674daa85fca2ed2fefd81eca4912bbc',
+    'ur_dashboard_msgs/srv/SetUserRole': 'RIHS01_a6a1ddde4e6d32a555f0d3f7c17ee4436b4f35583f4474fdd22efff055bd8b4f',
+    'ur_dashboard_msgs/srv/UploadProgram': 'RIHS01_a0a1da294e36fdbc6cda01a335696f007541b46bf6b9f683068f8e8d563a7f6a',
+    'controller_manager_msgs/msg/HardwareComponentState':
+        'RIHS01_8723f76b60e3ea54920065e3e777d93c68b76fc12839ad6a6ca4e0a6439b384c',
+    'controller_manager_msgs/srv/ListHardwareComponents':
+        'RIHS01_2ff105e609928671af16413362c0fdd089e1dd50c5a49d830db603ba8e4439c8',
+    'controller_manager_msgs/srv/SetHardwareComponentState':
+        'RIHS01_940b15846ed3e1fb561ab45edf77a992b811fd59c574f45d5205a84a0deb2f65',
+    'controller_manager_msgs/srv/LoadController':
+        'RIHS01_e37f7596c50c88cf8cb7a10cd376ff7579850cc63b5e787e9c8f11981f9ab4d2',
+    'controller_manager_msgs/srv/UnloadController':
+        'RIHS01_4055728e84c041348648d7f808c6681562000e3a9ce9fbb42c3350df25773f16',
+    'controller_manager_msgs/srv/ConfigureController':
+        'RIHS01_b5de498113f4eabc7b932e019ca0498d67304b1ca465fe8a426ea89644865ff9',
+    'controller_manager_msgs/srv/CleanupController':
+        'RIHS01_0e5e0da84cf97150abbb3a4e2249c67e6f43dba01ed9b7228b4deaab8838ec4b',
+    'tf2_msgs/msg/TF2Error': 'RIHS01_db2485e7d6a0ec75bf087e058ee45df682acc3a621ca7780503d10aac141809a',
 }
 
 
@@ -87,17 +131,18 @@ UPSTREAM_CONSTANTS = {
         **{name: i + 1 for i, name in enumerate(_SAFETY_MODES)},
         'TP_THREE_POSITION_ENABLING_STOP': 14, 'IMMI_EMERGENCY_STOP': 15, 'IMMI_SAFEGUARD_STOP': 16,
         'PROFISAFE_WAITING_FOR_PARAMETERS': 17, 'PROFISAFE_AUTOMATIC_MODE_SAFEGUARD_STOP': 18,
-        'PROFISAFE_SAFEGUARD_STOP': 19, 'PROFISAFE_EMERGENCY_STOP': 20, 'SAFETY_API_SAFEGUARD_STOP': 22},
+        'PROFISAFE_SAFEGUARD_STOP': 19, 'PROFISAFE_EMERGENCY_STOP': 20, 'SAFETY_API_SAFEGUARD_STOP': 22,
+        'IO_PLANE_STOP': 23},
     'ur_dashboard_msgs.msg.ProgramState': {'STOPPED': 'STOPPED', 'PLAYING': 'PLAYING', 'PAUSED': 'PAUSED'},
     'ur_dashboard_msgs.msg.ProgramInformation': {'PROGRAM_STATE_DRAFT': 'DRAFT', 'PROGRAM_STATE_FINAL': 'FINAL'},
     'ur_dashboard_msgs.msg.OperationalMode': {'MANUAL': 'MANUAL', 'AUTOMATIC': 'AUTOMATIC'},
     'ur_dashboard_msgs.msg.UserRole': {'PROGRAMMER': 'PROGRAMMER', 'OPERATOR': 'OPERATOR', 'NONE': 'NONE',
-                                       'LOCKED': 'LOCKED'},
+                                       'LOCKED': 'LOCKED', 'RESTRICTED': 'RESTRICTED'},
     'ur_dashboard_msgs.srv.GenerateFlightReport.Request': {'CONTROLLER': 'controller', 'SOFTWARE': 'software',
                                                            'SYSTEM': 'system'},
     'controller_manager_msgs.srv.SwitchController.Request': {'BEST_EFFORT': 1, 'STRICT': 2, 'AUTO': 3,
                                                              'FORCE_AUTO': 4},
-    'tf2_msgs.msg.TF2Error': {'NO_ERRORS': 0, 'LOOKUP_ERROR': 1, 'CONNECTIVITY_ERROR': 2, 'EXTRAPOLATION_ERROR': 3,
+    'tf2_msgs.msg.TF2Error': {'NO_ERROR': 0, 'LOOKUP_ERROR': 1, 'CONNECTIVITY_ERROR': 2, 'EXTRAPOLATION_ERROR': 3,
                               'INVALID_ARGUMENT_ERROR': 4, 'TIMEOUT_ERROR': 5, 'TRANSFORM_ERROR': 6},
 }
 

@@ -16,6 +16,7 @@ import threading
 from collections.abc import Callable
 from dataclasses import dataclass, field
 from functools import cached_property
+from pathlib import Path
 from typing import TYPE_CHECKING
 
 import numpy as np
@@ -81,6 +82,7 @@ class Host:
         robot: the robot's modes and program state (under `lock`).
         speed_scaling: the robot's own speed scaling (under `lock`).
         context: the rclpy context every component node lives in.
+        robot_files: the robot's file system (flight reports, support files), a directory of this run.
     """
 
     cfg: SimConfig
@@ -89,6 +91,7 @@ class Host:
     robot: RobotState
     speed_scaling: RobotSpeedScaling
     context: object
+    robot_files: Path | None = None
     # Conditions a service callback waits for, each with the event the loop sets once it holds (under `lock`).
     _waiters: list[tuple[Callable[[], bool], threading.Event]] = field(default_factory=list)
 

@@ -2,14 +2,20 @@
 
 A real controller answers one line per command line; the driver's dashboard client sends those lines and
 matches the answers. :class:`DashboardServer` answers the same commands with the same wording (UR's dashboard
-server documentation for e-series / PolyScope 5, as the Universal Robots Client Library expects it), changing
-the robot state as the robot would. Commands are case-insensitive, as on the robot. Unknown commands get the
-server's "could not understand" answer. Call :meth:`DashboardServer.handle` under the simulation lock.
+server documentation for CB3 and e-series, as the Universal Robots Client Library expects it), changing the robot
+state as the robot would. Commands are case-insensitive, as on the robot. A command the robot's software version
+does not know yet (``software.COMMANDS``), and any unknown command, gets the server's "could not understand"
+answer. Flight reports and support files are written into the robot's file system, a directory given to the
+server. Call :meth:`DashboardServer.handle` under the simulation lock.
 """
 from __future__ import annotations
 
+import json
 import posixpath
+import time
+import zipfile
 from dataclasses import dataclass
+from pathlib import Path
 
 from ur_sim_driver.robot.robot_state import (
     PLAYING,
@@ -18,11 +24,15 @@ from ur_sim_driver.robot.robot_state import (
     SAFETY_MODE_NAMES,
     RobotState,
 )
+from ur_sim_driver.robot.software import COMMANDS, SoftwareVersion, default_version, required
 
 INSTALLATIONS = ('default.installation',)  # installation files on the simulated robot
 UNLOCK_REFUSED = ('Cannot unlock protective stop until 5s after occurrence. '
                   'Always inspect cause of protective stop before unlocking')
-OPERATIONAL_MODE = 'AUTOMATIC'  # what the simulated robot reports after 'clear operational mode'
+OPERATIONAL_MODES = ('MANUAL', 'AUTOMATIC')  # e-series: set by the dashboard or the teach pendant
+USER_ROLES = ('PROGRAMMER', 'OPERATOR', 'NONE', 'LOCKED', 'RESTRICTED')  # CB3's setUserRole
+REPORT_TYPES = ('controller', 'software', 'system')  # generate flight report <type>
+SERIAL_NUMBER = '20260000001'  # [digits] a UR serial number starts with its year of manufacture
 
 
 @dataclass(frozen=True)
@@ -38,27 +48,42 @@ class DashboardServer:
 
     Args:
         robot: the robot state the commands act on (the caller holds the simulation lock).
+        ur_type: the robot's type, e.g. 'ur5e' (its model answer is 'UR5').
+        version: the controller's software version; the type's default when None.
+        files: the robot's file system (flight reports, support files); None: those commands fail.
     """
 
-    def __init__(self, robot: RobotState) -> None:
+    def __init__(self, robot: RobotState, ur_type: str = 'ur5e', version: SoftwareVersion | None = None,
+                 files: Path | None = None) -> None:
         self.robot = robot
+        self.version = version or default_version(ur_type)
+        self.model = 'UR' + ur_type[2:].removesuffix('e').upper()  # e-series types answer without the 'e'
+        self.files = files
         self.installation = INSTALLATIONS[0]
         self.log: list[str] = []  # messages added with addToLog
         self.popup: str | None = None  # text of the popup shown on the (simulated) teach pendant
+        self.operational_mode = 'AUTOMATIC'
+        self.user_role = 'PROGRAMMER'
+        self._reports = 0
 
     def handle(self, line: str) -> Reply:
         """Answer one command line (without the newline)."""
         text = line.strip()
         key = ' '.join(text.lower().split())
-        simple = _SIMPLE.get(key)
-        if simple is not None:
-            return simple(self)
-        for prefix, method in _WITH_ARGUMENT:
-            if key == prefix or key.startswith(prefix + ' '):
-                n = len(prefix.split())
-                words = text.split(None, n)  # the argument keeps its own spacing and case
-                return method(self, words[n] if len(words) > n else '')
+        command = key if key in _SIMPLE else next(
+            (prefix for prefix, _ in _WITH_ARGUMENT if key == prefix or key.startswith(prefix + ' ')), None)
+        if command is not None and not self._knows(command):
+            return Reply(f"could not understand: '{text}'", f'software {self.version.dotted()} does not know it')
+        if command in _SIMPLE:
+            return _SIMPLE[command](self)
+        if command is not None:
+            n = len(command.split())
+            words = text.split(None, n)  # the argument keeps its own spacing and case
+            return _ARGUMENT_METHODS[command](self, words[n] if len(words) > n else '')
         return Reply(f"could not understand: '{text}'")
+
+    def _knows(self, command: str) -> bool:
+        return command not in COMMANDS or required(command, self.version) is None
 
     # ---- commands ------------------------------------------------------------------------------
     def _power_on(self) -> Reply:
@@ -145,6 +170,67 @@ class DashboardServer:
         self.log.append(text)
         return Reply('Added log message')
 
+    def _polyscope_version(self) -> Reply:
+        return Reply(f'URSoftware {self.version.dotted()} (simulated)')
+
+    def _version_number(self) -> Reply:
+        return Reply(self.version.dotted())
+
+    def _clear_operational_mode(self) -> Reply:
+        return Reply('No longer controlling the operational mode. '
+                     f"Current operational mode: '{self.operational_mode}'.")
+
+    def _set_operational_mode(self, mode: str) -> Reply:
+        if mode.upper() not in OPERATIONAL_MODES:
+            return Reply(f"Failed setting operational mode: '{mode}'",
+                         f'operational mode {mode!r} is not one of {", ".join(m.lower() for m in OPERATIONAL_MODES)}')
+        self.operational_mode = mode.upper()
+        return Reply(f"Operational mode '{mode}' is set")
+
+    def _set_user_role(self, role: str) -> Reply:
+        if role.upper() not in USER_ROLES:
+            return Reply(f"Failed setting user role: '{role}'",
+                         f'user role {role!r} is not one of {", ".join(r.lower() for r in USER_ROLES)}')
+        self.user_role = role.upper()
+        return Reply(f'Setting user role: {role}')
+
+    def _flight_report(self, report_type: str) -> Reply:
+        kind = (report_type or 'system').lower()
+        if kind not in REPORT_TYPES:
+            return Reply(f"Flight Report generation failed: unknown report type '{report_type}'",
+                         f'report type {report_type!r} is not one of {", ".join(REPORT_TYPES)}')
+        if self.files is None:
+            return Reply('Flight Report generation failed', 'the robot has no file system here')
+        self._reports += 1
+        report_id = f'{SERIAL_NUMBER}-{self._reports:04d}'
+        folder = self.files / 'flightreports'
+        folder.mkdir(parents=True, exist_ok=True)
+        (folder / f'{report_id}.json').write_text(json.dumps(self._report(kind, report_id), indent=2))
+        return Reply(f'Flight Report generated with id: {report_id}')
+
+    def _support_file(self, directory: str) -> Reply:
+        if self.files is None:
+            return Reply('Support file generation failed', 'the robot has no file system here')
+        root = self.files.resolve()
+        target = (root / (directory or '.').lstrip('/')).resolve()
+        if root != target and root not in target.parents or not target.is_dir():
+            return Reply(f"Support file generation failed: directory '{directory}' does not exist",
+                         f'directory {directory!r} is not a directory of the robot ({root})')
+        name = f'ur_{SERIAL_NUMBER}_{time.strftime("%Y-%m-%d_%H-%M-%S")}.zip'
+        with zipfile.ZipFile(target / name, 'w', zipfile.ZIP_DEFLATED) as archive:
+            archive.writestr('flight_report.json', json.dumps(self._report('system', 'support'), indent=2))
+            archive.writestr('log.txt', '\n'.join(self.log))
+        return Reply(f'Completed successfully: {name}')
+
+    def _report(self, kind: str, report_id: str) -> dict:
+        """What a flight report holds here: the robot's identity and state."""
+        r = self.robot
+        return {'id': report_id, 'type': kind, 'serial_number': SERIAL_NUMBER, 'robot_model': self.model,
+                'software_version': self.version.dotted(), 'robot_mode': ROBOT_MODE_NAMES[r.robot_mode],
+                'safety_mode': SAFETY_MODE_NAMES[r.safety_mode], 'program_state': r.program_state,
+                'loaded_program': r.loaded_program, 'operational_mode': self.operational_mode,
+                'user_role': self.user_role, 'log': list(self.log)}
+
 
 def _fixed(answer: str):
     return lambda server: Reply(answer)
@@ -170,8 +256,14 @@ _SIMPLE = {
     'get loaded program': DashboardServer._loaded_program,
     'isprogramsaved': DashboardServer._program_saved,
     'is in remote control': _fixed('true'),  # dashboard commands are accepted: the robot is in remote control
-    'clear operational mode': _fixed('No longer controlling the operational mode. '
-                                     f"Current operational mode: '{OPERATIONAL_MODE}'."),
+    'clear operational mode': DashboardServer._clear_operational_mode,
+    'get operational mode': lambda server: Reply(server.operational_mode),
+    'getuserrole': lambda server: Reply(server.user_role),
+    'polyscopeversion': DashboardServer._polyscope_version,
+    'version': DashboardServer._version_number,
+    'get serial number': _fixed(SERIAL_NUMBER),
+    'get robot model': lambda server: Reply(server.model),
+    'savelog': _fixed('Log saved to disk'),
     'quit': _fixed('Disconnected'),
 }
 # Longest prefix first: 'load installation x' must not be taken for 'load <program>'.
@@ -180,4 +272,9 @@ _WITH_ARGUMENT = (
     ('load', DashboardServer._load),
     ('popup', DashboardServer._popup),
     ('addtolog', DashboardServer._add_to_log),
+    ('set operational mode', DashboardServer._set_operational_mode),
+    ('setuserrole', DashboardServer._set_user_role),
+    ('generate flight report', DashboardServer._flight_report),
+    ('generate support file', DashboardServer._support_file),
 )
+_ARGUMENT_METHODS = dict(_WITH_ARGUMENT)

@@ -9,6 +9,7 @@ from typing import Any
 from ur_sim_driver.errors import ConfigError
 from ur_sim_driver.robot.dispenser import DispenserParams, dispenser_params
 from ur_sim_driver.robot.safety import DEFAULT_CONTACT_FORCE, DEFAULT_FORCE_WINDOW
+from ur_sim_driver.robot.software import SoftwareVersion, default_version, parse_version
 
 UR_TYPES = ('ur5', 'ur5e', 'ur10', 'ur10e')
 TOOLS = ('none', 'dispenser')
@@ -57,6 +58,11 @@ class SimConfig:
     constraints: tuple[JointConstraint, ...] = (JointConstraint(),) * 6
     publish_frequency: float = 20.0  # [Hz] of simulated time: robot_state_publisher's /tf
     dispenser: DispenserParams = DispenserParams()  # the glue dispenser's model (tool: dispenser only)
+    software_version: SoftwareVersion | None = None  # the controller's software; None: the type's default
+
+    def __post_init__(self) -> None:
+        if self.software_version is None:  # resolved once: every reader sees the version the robot runs
+            object.__setattr__(self, 'software_version', default_version(self.ur_type))
 
     def prefixed(self, name: str) -> str:
         """`name` under the configured namespace, e.g. '/ur10/joint_states'."""
@@ -128,8 +134,10 @@ def sim_config_from_params(params: Mapping[str, Any]) -> SimConfig:
     if 0.0 < update_rate < 10.0:
         raise ConfigError(f"parameter 'update_rate' = {update_rate} is outside the allowed range: 0 (type default) "
                           'or [10, 5000] Hz')
+    ur_type = _choice('ur_type', get('ur_type', d.ur_type), UR_TYPES)
     return SimConfig(
-        ur_type=_choice('ur_type', get('ur_type', d.ur_type), UR_TYPES),
+        ur_type=ur_type,
+        software_version=parse_version(str(get('software_version', '')), ur_type),
         tf_prefix=str(get('tf_prefix', d.tf_prefix)),
         namespace=str(get('namespace', d.namespace)),
         joints=joints,

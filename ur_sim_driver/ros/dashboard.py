@@ -8,6 +8,11 @@ service therefore returns once the robot is there, so `power_on`, `brake_release
 after the other. `message` / `answer` is the server's answer; when the answer is not the expected one it is
 the client library's "Expected: <pattern>, but received: <answer>". ur_sim does the same against
 :class:`~ur_sim_driver.robot.dashboard_server.DashboardServer`, waiting in simulated time.
+
+Before sending, the client library checks that the robot's software version knows the command
+(``robot/software.py``) and answers with its version-mismatch text if not; the program services of PolyScope X
+(get_programs, upload_program, update_program, download_program) answer "Not implemented for this robot software
+version." on CB3 and PolyScope 5, as the driver's do.
 """
 from __future__ import annotations
 
@@ -21,16 +26,29 @@ from rclpy.node import Node
 from std_srvs.srv import Trigger
 from ur_dashboard_msgs.srv import (
     AddToLog,
+    DownloadProgram,
+    GenerateFlightReport,
+    GenerateSupportFile,
     GetLoadedProgram,
+    GetOperationalMode,
+    GetPolyScopeVersion,
+    GetPrograms,
     GetProgramState,
     GetRobotMode,
+    GetRobotModel,
     GetSafetyMode,
+    GetSafetyStatus,
+    GetSerialNumber,
+    GetUserRole,
     IsInRemoteControl,
     IsProgramRunning,
     IsProgramSaved,
     Load,
     Popup,
     RawRequest,
+    SetOperationalMode,
+    SetUserRole,
+    UploadProgram,
 )
 
 from ur_sim_driver.controllers.base import Component, Host
@@ -46,11 +64,15 @@ from ur_sim_driver.robot.robot_state import (
     STOPPED,
     RobotState,
 )
+from ur_sim_driver.robot.software import COMMANDS, required
 
 WAIT_TIMEOUT = 5.0  # [s] of simulated time the client waits for the robot to reach a commanded state
 POWER_ON_TIMEOUT = 300.0  # [s] the driver's power_on service waits for IDLE
 STALL_TIMEOUT = 2.0  # [s] of wall time without simulated time advancing: the simulation is not running
 NOT_CONNECTED = 'Failed to send request to dashboard server. Are you connected to the Dashboard Server?'
+NOT_IMPLEMENTED = 'Not implemented for this robot software version.'
+# ur_dashboard_msgs/SafetyStatus by the name in a `safetystatus` answer (the driver maps VALIDATE_JOINT to its _ID)
+_SAFETY_STATUS = {name: mode for mode, name in SAFETY_MODE_NAMES.items()} | {'VALIDATE_JOINT': 10}
 _ROBOT_MODES = {name: mode for mode, name in ROBOT_MODE_NAMES.items()}
 _SAFETY_MODES = {name: mode for mode, name in SAFETY_MODE_NAMES.items()}
 
@@ -125,7 +147,7 @@ class DashboardClient(Component):
         self._connection = threading.Lock()
 
     def on_configure(self, host: Host, node: Node) -> None:
-        self.server = DashboardServer(host.robot)
+        self.server = DashboardServer(host.robot, host.cfg.ur_type, host.cfg.software_version, host.robot_files)
         for name, command in TRIGGERS.items():
             node.create_service(Trigger, f'~/{name}', self._trigger_callback(command))
         node.create_service(Trigger, '~/connect', self._on_connect)
@@ -141,6 +163,20 @@ class DashboardClient(Component):
         node.create_service(Popup, '~/popup', self._on_popup)
         node.create_service(AddToLog, '~/add_to_log', self._on_add_to_log)
         node.create_service(RawRequest, '~/raw_request', self._on_raw_request)
+        node.create_service(GetSerialNumber, '~/get_serial_number', self._on_serial_number)
+        node.create_service(GetPolyScopeVersion, '~/get_polyscope_version', self._on_polyscope_version)
+        node.create_service(GetRobotModel, '~/get_robot_model', self._on_robot_model)
+        node.create_service(GetSafetyStatus, '~/get_safety_status', self._on_safety_status)
+        node.create_service(GetUserRole, '~/get_user_role', self._on_get_user_role)
+        node.create_service(SetUserRole, '~/set_user_role', self._on_set_user_role)
+        node.create_service(GetOperationalMode, '~/get_operational_mode', self._on_get_operational_mode)
+        node.create_service(SetOperationalMode, '~/set_operational_mode', self._on_set_operational_mode)
+        node.create_service(GenerateFlightReport, '~/generate_flight_report', self._on_flight_report)
+        node.create_service(GenerateSupportFile, '~/generate_support_file', self._on_support_file)
+        # PolyScope X's program services: not implemented on CB3 and PolyScope 5 (the driver's answer).
+        for srv_type, name in ((GetPrograms, 'get_programs'), (UploadProgram, 'upload_program'),
+                               (UploadProgram, 'update_program'), (DownloadProgram, 'download_program')):
+            node.create_service(srv_type, f'~/{name}', self._not_implemented)
 
     # ---- talking to the server -------------------------------------------------------------------
     def send(self, line: str) -> str:
@@ -160,8 +196,26 @@ class DashboardClient(Component):
             self.node.get_logger().info(f"dashboard '{line}': {reply.answer} ({reply.refusal})")
         return reply.answer
 
+    def mismatch(self, line: str) -> str | None:
+        """The client library's refusal of `line` when the robot's software version does not know its command (it
+        is never sent then), else None."""
+        words = line.split()
+        for n in range(min(len(words), 4), 0, -1):  # the longest command the line starts with
+            key = ' '.join(words[:n]).lower()
+            if key in COMMANDS:
+                version = self.server.version
+                needed = required(key, version)
+                if needed is None:
+                    return None
+                return (f"Dashboard command '{' '.join(words[:n])}' is not supported by this robot version."
+                        f'(Required version: {needed}, actual version: {version})')
+        return None
+
     def run(self, command: Command) -> tuple[bool, str]:
         """Send `command`, check its answer and wait for its state: (success, message)."""
+        refused = self.mismatch(command.line)
+        if refused is not None:
+            return False, refused
         try:
             answer = self.send(command.line)
         except NotConnected as exc:
@@ -194,6 +248,10 @@ class DashboardClient(Component):
 
     def _query(self, line: str, pattern: str, response) -> re.Match | None:
         """Send a query; fill `answer` and `success` as the driver does; the match when successful."""
+        refused = self.mismatch(line)
+        if refused is not None:
+            response.answer, response.success = refused, False
+            return None
         try:
             response.answer = self.send(line)
         except NotConnected as exc:
@@ -271,6 +329,10 @@ class DashboardClient(Component):
 
     def _on_remote_control(self, request, response: IsInRemoteControl.Response) -> IsInRemoteControl.Response:
         # The driver fills only remote_control and success here; `answer` stays empty unless the call fails.
+        refused = self.mismatch('is in remote control')
+        if refused is not None:
+            response.answer, response.success = refused, False
+            return response
         try:
             response.remote_control = self.send('is in remote control') == 'true'
             response.success = True
@@ -291,4 +353,71 @@ class DashboardClient(Component):
             response.answer = self.send(request.query)
         except NotConnected as exc:
             response.answer = str(exc)
+        return response
+
+    def _on_serial_number(self, request, response: GetSerialNumber.Response) -> GetSerialNumber.Response:
+        if self._query('get serial number', r'(?:20).*', response):
+            response.serial_number = int(response.answer)
+        return response
+
+    def _on_polyscope_version(self, request, response: GetPolyScopeVersion.Response) -> GetPolyScopeVersion.Response:
+        if self._query('PolyscopeVersion', r'(?:URSoftware ).*', response):
+            numbers = re.search(r'([0-9]+)\.([0-9]+)\.([0-9]+)\.([0-9]+)', response.answer)
+            if numbers:
+                v = response.version
+                v.major, v.minor, v.bugfix, v.build = (int(x) for x in numbers.groups())
+        return response
+
+    def _on_robot_model(self, request, response: GetRobotModel.Response) -> GetRobotModel.Response:
+        if self._query('get robot model', r'(?:UR).*', response):
+            response.robot_model = response.answer
+        return response
+
+    def _on_safety_status(self, request, response: GetSafetyStatus.Response) -> GetSafetyStatus.Response:
+        match = self._query('safetystatus', r'Safetystatus: (.*)', response)
+        if match:
+            response.safety_status.status = _SAFETY_STATUS.get(match[1], 0)
+        return response
+
+    def _on_get_user_role(self, request, response: GetUserRole.Response) -> GetUserRole.Response:
+        if self._query('getUserRole', r'(PROGRAMMER|OPERATOR|NONE|LOCKED|RESTRICTED)', response):
+            response.user_role.role = response.answer
+        return response
+
+    def _on_set_user_role(self, request: SetUserRole.Request, response: SetUserRole.Response) -> SetUserRole.Response:
+        role = request.user_role.role
+        response.success, response.answer = self.run(Command(f'setUserRole {role}',
+                                                             f'Setting user role: {re.escape(role)}'))
+        return response
+
+    def _on_get_operational_mode(self, request, response: GetOperationalMode.Response) -> GetOperationalMode.Response:
+        if self._query('get operational mode', r'(NONE|MANUAL|AUTOMATIC)', response):
+            response.operational_mode.mode = response.answer
+        return response
+
+    def _on_set_operational_mode(self, request: SetOperationalMode.Request,
+                                 response: SetOperationalMode.Response) -> SetOperationalMode.Response:
+        mode = request.operational_mode.mode
+        response.success, response.answer = self.run(Command(f'set operational mode {mode}',
+                                                             f'(?:Operational mode ).*(?:{re.escape(mode)}).*'))
+        return response
+
+    def _on_flight_report(self, request: GenerateFlightReport.Request,
+                          response: GenerateFlightReport.Response) -> GenerateFlightReport.Response:
+        response.success, response.answer = self.run(Command(f'generate flight report {request.report_type}',
+                                                             r'(?:Flight Report generated with id:).*'))
+        if response.success:
+            response.report_id = response.answer.split('id: ', 1)[-1]
+        return response
+
+    def _on_support_file(self, request: GenerateSupportFile.Request,
+                         response: GenerateSupportFile.Response) -> GenerateSupportFile.Response:
+        response.success, response.answer = self.run(Command(f'generate support file {request.dir_path}',
+                                                             r'(?:Completed successfully:).*'))
+        if response.success:
+            response.generated_file_name = response.answer.split('Completed successfully: ', 1)[-1]
+        return response
+
+    def _not_implemented(self, request, response):
+        response.answer, response.success = NOT_IMPLEMENTED, False
         return response

@@ -16,8 +16,10 @@ import gc
 import os
 import signal
 import sys
+import tempfile
 import threading
 import time
+from pathlib import Path
 
 import rclpy
 from rclpy.executors import ExternalShutdownException, MultiThreadedExecutor
@@ -78,7 +80,7 @@ class UrSimNode(Node):
                          allow_undeclared_parameters=True,
                          automatically_declare_parameters_from_overrides=True)
         self.cfg: SimConfig = sim_config_from_params(
-            {name: p.value for name, p in self._parameters.items() if name != 'use_sim_time'})
+            {name: p.value for name, p in self.get_parameters_by_prefix('').items() if name != 'use_sim_time'})
         self._warn_unknown_parameters()
         self.sim = Simulator(self.cfg)
         use_mmap_for_large_blocks()  # long trajectories' arrays go back to the system when dropped
@@ -117,7 +119,10 @@ class UrSimNode(Node):
             defaults=self._defaults), self._on_gateway)
 
         # The driver's controllers and nodes, one module each; the controller manager holds them.
-        self.host = Host(self.cfg, self.sim, self._lock, self.robot, self.scaling, self.context)
+        # The robot's file system for this run (the dashboard's flight reports and support files).
+        self._robot_files = tempfile.TemporaryDirectory(prefix='ur_sim_robot_')
+        self.host = Host(self.cfg, self.sim, self._lock, self.robot, self.scaling, self.context,
+                         Path(self._robot_files.name))
         feedback_every = round(self.sim.control_rate / self.cfg.action_monitor_rate)
         for name in trajectory_names:
             core = TrajectoryController(self.joints, self._defaults, self.sim.state().q, params.v_max,
@@ -160,7 +165,7 @@ class UrSimNode(Node):
     # ---- set-up ----------------------------------------------------------------------------------
     def _warn_unknown_parameters(self) -> None:
         known = set(SimConfig.__dataclass_fields__) | {'use_sim_time', 'start_type_description_service'}
-        for name in self._parameters:
+        for name in self.get_parameters_by_prefix(''):
             if name.split('.')[0] not in known and not name.startswith('constraints.'):
                 self.get_logger().warning(f"parameter '{name}' is not used by ur_sim; valid names: "
                                           f"{', '.join(sorted(known - {'constraints'}))}, constraints.*")
@@ -341,6 +346,7 @@ class UrSimNode(Node):
             component.destroy()
         self.controller_manager.destroy()
         super().destroy_node()
+        self._robot_files.cleanup()
 
 
 def main(argv: list[str] | None = None) -> int:

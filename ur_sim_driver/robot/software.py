@@ -1,0 +1,117 @@
+"""The simulated controller's software: its version (PolyScope / CB3 software), and which dashboard commands that
+version's dashboard server knows.
+
+A real CB3 runs software 3.x, an e-series PolyScope 5.x, and the newer types PolyScope X 10.x. The dashboard
+server of each version knows the commands that version introduced and no others; the driver's client library
+(Universal Robots Client Library 2.14, ``dashboard_client_implementation_g5.cpp``) checks the same minimum versions
+before it sends a command. :data:`COMMANDS` holds those minima, one table for both sides. No rclpy here.
+"""
+from __future__ import annotations
+
+import re
+from typing import NamedTuple
+
+from ur_sim_driver.errors import ConfigError
+
+
+class SoftwareVersion(NamedTuple):
+    """A controller software version, e.g. 5.12.6 build 0."""
+
+    major: int
+    minor: int
+    bugfix: int
+    build: int = 0
+
+    def __str__(self) -> str:
+        # As the client library prints a version in its messages: major.minor.bugfix-build
+        return f'{self.major}.{self.minor}.{self.bugfix}-{self.build}'
+
+    @property
+    def e_series(self) -> bool:
+        """PolyScope 5 or later (the client library's isESeries: major >= 5)."""
+        return self.major >= 5
+
+    def dotted(self) -> str:
+        """As the dashboard server's `PolyscopeVersion` answer writes it: major.minor.bugfix.build."""
+        return f'{self.major}.{self.minor}.{self.bugfix}.{self.build}'
+
+
+# Widely used releases: 5.12.6 (the URSim e-series image many driver users test with), 3.15.8 (a late CB3
+# release, upstream's CB3 dashboard test entry). UR's build numbers are not published with them: build 0 marks
+# the version as a simulated one.
+E_SERIES_VERSION = SoftwareVersion(5, 12, 6, 0)
+CB3_VERSION = SoftwareVersion(3, 15, 8, 0)
+CB3_TYPES = ('ur3', 'ur5', 'ur10')
+
+
+def default_version(ur_type: str) -> SoftwareVersion:
+    """The version a robot of `ur_type` runs unless told otherwise."""
+    return CB3_VERSION if ur_type in CB3_TYPES else E_SERIES_VERSION
+
+
+def parse_version(text: str, ur_type: str) -> SoftwareVersion:
+    """`software_version` as given ('5.12.6', '3.15.8.0', or '' for the type's default) for a robot of `ur_type`.
+
+    Raises:
+        ConfigError: naming the parameter, the value and what the robot type runs.
+    """
+    if not text:
+        return default_version(ur_type)
+    match = re.fullmatch(r'(\d+)\.(\d+)\.(\d+)(?:\.(\d+))?', text.strip())
+    cb3 = ur_type in CB3_TYPES
+    runs = '3.x (CB3 software)' if cb3 else '5.x (PolyScope 5)'
+    if match is None:
+        raise ConfigError(f"parameter 'software_version' = {text!r} is not a version: major.minor.bugfix[.build], "
+                          f"e.g. {default_version(ur_type).dotted()}")
+    version = SoftwareVersion(*(int(g or 0) for g in match.groups()))
+    if version.major >= 10:
+        raise ConfigError(f"parameter 'software_version' = {text!r} is PolyScope X, which ur_sim does not simulate "
+                          f'yet; {ur_type} runs {runs}')
+    if (version.major == 3) != cb3 or version.major not in (3, 5):
+        raise ConfigError(f"parameter 'software_version' = {text!r} does not run on a {ur_type}: it runs {runs}")
+    return version
+
+
+class Minimum(NamedTuple):
+    """The first version of each series whose dashboard server knows a command."""
+
+    cb3: SoftwareVersion
+    e_series: SoftwareVersion
+
+    def of(self, version: SoftwareVersion) -> SoftwareVersion:
+        return self.e_series if version.e_series else self.cb3
+
+
+def _v(text: str) -> SoftwareVersion:
+    return SoftwareVersion(*(int(x) for x in (text.split('.') + ['0', '0'])[:3]))
+
+
+def _minimum(cb3: str, e_series: str) -> Minimum:
+    return Minimum(_v(cb3), _v(e_series))
+
+
+# Command (lower case, as keyed in the client library) -> the first versions that know it. A CB3 minimum of 3.99
+# or 5.x, or an e-series minimum of 5.99, means the command does not exist in that series.
+COMMANDS: dict[str, Minimum] = {
+    **dict.fromkeys(('load', 'play', 'stop', 'pause', 'quit', 'shutdown'), _minimum('1.4', '5.0.0')),
+    **dict.fromkeys(('running', 'robotmode', 'get loaded program', 'popup', 'close popup'), _minimum('1.6', '5.0.0')),
+    **dict.fromkeys(('addtolog', 'isprogramsaved', 'programstate', 'polyscopeversion'), _minimum('1.8', '5.0.0')),
+    **dict.fromkeys(('power on', 'power off', 'brake release', 'safetymode'), _minimum('3.0', '5.0.0')),
+    **dict.fromkeys(('unlock protective stop', 'close safety popup'), _minimum('3.1', '5.0.0')),
+    'load installation': _minimum('3.2', '5.0.0'),
+    'restart safety': _minimum('3.7', '5.1.0'),
+    **dict.fromkeys(('get serial number', 'get robot model'), _minimum('3.12', '5.6.0')),
+    **dict.fromkeys(('generate flight report', 'generate support file', 'savelog'), _minimum('3.13', '5.8.0')),
+    **dict.fromkeys(('setuserrole', 'getuserrole'), _minimum('3.1.0', '5.99.0')),
+    'set operational mode': _minimum('3.99.0', '5.0.0'),
+    'clear operational mode': _minimum('5.0.0', '5.0.0'),
+    'safetystatus': _minimum('5.4.0', '5.4.0'),
+    **dict.fromkeys(('get operational mode', 'is in remote control'), _minimum('5.6.0', '5.6.0')),
+    'version': _minimum('5.0.0', '5.0.0'),
+}
+
+
+def required(command: str, version: SoftwareVersion) -> SoftwareVersion | None:
+    """The version `command` needs on this robot's series when `version` is older, else None (it is known)."""
+    minimum = COMMANDS[command].of(version)
+    return minimum if version[:3] < minimum[:3] else None
