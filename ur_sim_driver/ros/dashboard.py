@@ -20,7 +20,6 @@ import re
 import threading
 import time
 from collections.abc import Callable
-from dataclasses import dataclass
 
 from rclpy.node import Node
 from std_srvs.srv import Trigger
@@ -53,84 +52,21 @@ from ur_dashboard_msgs.srv import (
 
 from ur_sim_driver.controllers.base import Component, Host
 from ur_sim_driver.robot.dashboard_server import DashboardServer
-from ur_sim_driver.robot.robot_state import (
-    IDLE,
-    PAUSED,
-    PLAYING,
-    POWER_OFF,
-    ROBOT_MODE_NAMES,
-    RUNNING,
-    SAFETY_MODE_NAMES,
-    STOPPED,
-    RobotState,
-)
+from ur_sim_driver.robot.robot_state import STOPPED, RobotState
 from ur_sim_driver.robot.software import COMMANDS, required
+from ur_sim_driver.ros.dashboard_commands import (
+    NOT_CONNECTED,
+    NOT_IMPLEMENTED,
+    ROBOT_MODES_BY_NAME,
+    SAFETY_MODES_BY_NAME,
+    SAFETY_STATUS_BY_NAME,
+    STALL_TIMEOUT,
+    TRIGGERS,
+    Command,
+    NotConnected,
+)
 
-WAIT_TIMEOUT = 5.0  # [s] of simulated time the client waits for the robot to reach a commanded state
-POWER_ON_TIMEOUT = 300.0  # [s] the driver's power_on service waits for IDLE
-STALL_TIMEOUT = 2.0  # [s] of wall time without simulated time advancing: the simulation is not running
-NOT_CONNECTED = 'Failed to send request to dashboard server. Are you connected to the Dashboard Server?'
-NOT_IMPLEMENTED = 'Not implemented for this robot software version.'
-# ur_dashboard_msgs/SafetyStatus by the name in a `safetystatus` answer (the driver maps VALIDATE_JOINT to its _ID)
-_SAFETY_STATUS = {name: mode for mode, name in SAFETY_MODE_NAMES.items()} | {'VALIDATE_JOINT': 10}
-_ROBOT_MODES = {name: mode for mode, name in ROBOT_MODE_NAMES.items()}
-_SAFETY_MODES = {name: mode for mode, name in SAFETY_MODE_NAMES.items()}
-
-
-class NotConnected(Exception):
-    """The client is disconnected (after `quit` or `shutdown`)."""
-
-
-@dataclass(frozen=True)
-class Command:
-    """One dashboard service as the driver runs it.
-
-    Attributes:
-        line: the command line sent to the server.
-        expected: regular expression the answer must match in full.
-        until: robot-state condition waited for after a matching answer (None: no wait).
-        failed: message when the condition is not reached in time.
-        timeout: [s] of simulated time to wait.
-        strict: False when the driver reports success even if the wait ran out (stop).
-    """
-
-    line: str
-    expected: str
-    until: Callable[[RobotState], bool] | None = None
-    failed: str = ''
-    timeout: float = WAIT_TIMEOUT
-    strict: bool = True
-
-
-def _expected_state(what: str, state: str) -> str:
-    return f"Failed to {what} program. Expected 'programState' to be '{state}', but did not receive such a message."
-
-
-TRIGGERS = {
-    'power_on': Command('power on', 'Powering on', lambda r: r.robot_mode in (IDLE, RUNNING),
-                        "Failed to get expected response for command 'power on' within the timeout. "
-                        'Last response was: Powering on', POWER_ON_TIMEOUT),
-    'power_off': Command('power off', 'Powering off', lambda r: r.robot_mode == POWER_OFF, 'Powering off'),
-    'brake_release': Command('brake release', 'Brake releasing', lambda r: r.robot_mode == RUNNING,
-                             "Failed to release brakes. Expected 'robotmode' to be 'RUNNING', but did not receive it."),
-    'play': Command('play', 'Starting program', lambda r: r.program_state == PLAYING,
-                    _expected_state('play', PLAYING)),
-    'pause': Command('pause', 'Pausing program', lambda r: r.program_state == PAUSED,
-                     _expected_state('pause', PAUSED)),
-    'stop': Command('stop', 'Stopped', lambda r: r.program_state == STOPPED, _expected_state('stop', STOPPED),
-                    strict=False),
-    'unlock_protective_stop': Command(
-        'unlock protective stop', 'Protective stop releasing', lambda r: r.robot_mode == RUNNING,
-        "Failed to unlock the protective stop. Expected 'robotmode' to be 'RUNNING', but did not receive it."),
-    'restart_safety': Command('restart safety', 'Restarting safety', lambda r: r.robot_mode == POWER_OFF,
-                              "Failed to power off the robot. Expected 'robotmode' to be 'POWER_OFF', but did not "
-                              'receive such a message.'),
-    'close_popup': Command('close popup', 'closing popup'),
-    'close_safety_popup': Command('close safety popup', 'closing safety popup'),
-    'clear_operational_mode': Command('clear operational mode', r'No longer controlling the operational mode\..*'),
-    'shutdown': Command('shutdown', 'Shutting down'),
-    'quit': Command('quit', 'Disconnected'),
-}
+__all__ = ['NOT_CONNECTED', 'NOT_IMPLEMENTED', 'DashboardClient']
 
 
 class DashboardClient(Component):
@@ -280,13 +216,13 @@ class DashboardClient(Component):
     def _on_robot_mode(self, request, response: GetRobotMode.Response) -> GetRobotMode.Response:
         match = self._query('robotmode', r'Robotmode: (.*)', response)
         if match:
-            response.robot_mode.mode = _ROBOT_MODES[match[1]]
+            response.robot_mode.mode = ROBOT_MODES_BY_NAME[match[1]]
         return response
 
     def _on_safety_mode(self, request, response: GetSafetyMode.Response) -> GetSafetyMode.Response:
         match = self._query('safetymode', r'Safetymode: (.*)', response)
         if match:
-            response.safety_mode.mode = _SAFETY_MODES[match[1]]
+            response.safety_mode.mode = SAFETY_MODES_BY_NAME[match[1]]
         return response
 
     def _on_running(self, request, response: IsProgramRunning.Response) -> IsProgramRunning.Response:
@@ -376,7 +312,7 @@ class DashboardClient(Component):
     def _on_safety_status(self, request, response: GetSafetyStatus.Response) -> GetSafetyStatus.Response:
         match = self._query('safetystatus', r'Safetystatus: (.*)', response)
         if match:
-            response.safety_status.status = _SAFETY_STATUS.get(match[1], 0)
+            response.safety_status.status = SAFETY_STATUS_BY_NAME.get(match[1], 0)
         return response
 
     def _on_get_user_role(self, request, response: GetUserRole.Response) -> GetUserRole.Response:
