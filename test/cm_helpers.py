@@ -2,7 +2,19 @@
 from __future__ import annotations
 
 from builtin_interfaces.msg import Duration
-from controller_manager_msgs.srv import ListControllers, ListControllerTypes, ListHardwareInterfaces, SwitchController
+from controller_manager_msgs.srv import (
+    CleanupController,
+    ConfigureController,
+    ListControllers,
+    ListControllerTypes,
+    ListHardwareComponents,
+    ListHardwareInterfaces,
+    LoadController,
+    SetHardwareComponentState,
+    SwitchController,
+    UnloadController,
+)
+from lifecycle_msgs.msg import State
 from rclpy.callback_groups import ReentrantCallbackGroup
 from sim_harness import SimHarness, wait_answer, wait_still
 
@@ -11,7 +23,7 @@ BEST_EFFORT = SwitchController.Request.BEST_EFFORT
 
 
 class ControllerManagerClient:
-    """list_controllers, switch_controller, list_controller_types and list_hardware_interfaces of one ur_sim."""
+    """The controller manager services of one ur_sim."""
 
     def __init__(self, h: SimHarness) -> None:
         p = h.sim.cfg.prefixed
@@ -25,7 +37,17 @@ class ControllerManagerClient:
                                          callback_group=group)
         self._hardware = node.create_client(ListHardwareInterfaces, p('controller_manager/list_hardware_interfaces'),
                                             callback_group=group)
-        for client in (self._list, self._switch, self._types, self._hardware):
+        self._lifecycle = {name: node.create_client(srv, p(f'controller_manager/{name}_controller'),
+                                                    callback_group=group)
+                           for name, srv in (('load', LoadController), ('configure', ConfigureController),
+                                             ('cleanup', CleanupController), ('unload', UnloadController))}
+        self._components = node.create_client(ListHardwareComponents,
+                                              p('controller_manager/list_hardware_components'), callback_group=group)
+        self._set_state = node.create_client(SetHardwareComponentState,
+                                             p('controller_manager/set_hardware_component_state'),
+                                             callback_group=group)
+        for client in (self._list, self._switch, self._types, self._hardware, *self._lifecycle.values(),
+                       self._components, self._set_state):
             wait_still(client.service_is_ready, what=f'the service {client.srv_name}')
 
     @staticmethod
@@ -51,3 +73,18 @@ class ControllerManagerClient:
 
     def hardware(self):
         return self._call(self._hardware, ListHardwareInterfaces.Request())
+
+    def lifecycle(self, operation: str, name: str) -> bool:
+        """load, configure, cleanup or unload `name`: the answer's ok."""
+        srv = {'load': LoadController, 'configure': ConfigureController, 'cleanup': CleanupController,
+               'unload': UnloadController}[operation]
+        return self._call(self._lifecycle[operation], srv.Request(name=name)).ok
+
+    def components(self):
+        """The controller_manager_msgs/HardwareComponentState of every hardware component."""
+        return list(self._call(self._components, ListHardwareComponents.Request()).component)
+
+    def set_component_state(self, name: str, state_id: int, label: str = ''):
+        """The SetHardwareComponentState response (ok, state)."""
+        return self._call(self._set_state, SetHardwareComponentState.Request(
+            name=name, target_state=State(id=state_id, label=label)))

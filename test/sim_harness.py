@@ -14,6 +14,7 @@ import rclpy
 from builtin_interfaces.msg import Duration
 from control_msgs.action import FollowJointTrajectory
 from control_msgs.msg import JointTolerance, SpeedScalingFactor
+from lifecycle_msgs.msg import State
 from rclpy.callback_groups import ReentrantCallbackGroup
 from rclpy.executors import MultiThreadedExecutor, SingleThreadedExecutor
 from rclpy.node import Node
@@ -432,7 +433,9 @@ class RobotKeeper:
     def remember(self) -> None:
         """The controllers active now and the pose now are the ones to restore (for a fixture that switched
         controllers or moved the robot in its set-up)."""
-        self.active = {name for name, state in self.cm.states().items() if state == 'active'}
+        states = self.cm.states()
+        self.loaded = list(states)
+        self.active = {name for name, state in states.items() if state == 'active'}
         self.pose = self.h.q.copy()
 
     def call(self, name: str):
@@ -447,6 +450,16 @@ class RobotKeeper:
 
     def recover(self) -> None:
         robot = self.h.sim.robot
+        # The hardware connected again, and the controllers loaded and configured as they were.
+        for component in self.cm.components():
+            if component.state.id != State.PRIMARY_STATE_ACTIVE:
+                assert self.cm.set_component_state(component.name, State.PRIMARY_STATE_ACTIVE).ok, component.name
+        states = self.cm.states()
+        for name in self.loaded:
+            if name not in states:
+                assert self.cm.lifecycle('load', name), name
+            if states.get(name, 'unconfigured') == 'unconfigured':
+                assert self.cm.lifecycle('configure', name), name
         if robot.safety_mode == PROTECTIVE_STOP:
             wait_for(lambda: robot.unlock_wait() == 0.0, what='the 5 s before a protective stop may be unlocked')
             self._call('unlock_protective_stop')

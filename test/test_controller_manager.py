@@ -1,15 +1,17 @@
-"""The controller manager's switch rules (ros2_control jazzy), with the UR hardware's mode check."""
+"""The controller manager's switch rules (ros2_control jazzy 4.46), with the UR hardware's mode check."""
 from __future__ import annotations
 
 import pytest
 
+from ur_sim_driver.controllers import hardware_component as hc
 from ur_sim_driver.controllers import ur_hardware as hw
 from ur_sim_driver.controllers.controller_manager import (
     ABORT_STRICT,
+    ABORT_STRICT_UNKNOWN,
     BEST_EFFORT,
-    EMPTY_SWITCH,
     FORCE_AUTO,
     HARDWARE_REJECTED,
+    NOTHING_TO_DO,
     STRICT,
     SWITCHED,
     ControllerManager,
@@ -34,7 +36,7 @@ def _manager(active=('scaled', 'jsb')) -> ControllerManager:
         ControllerSpec('fpc', 'position_controllers/JointGroupPositionController', POS, stops_with_program=True),
         ControllerSpec('fvc', 'velocity_controllers/JointGroupVelocityController', VEL, stops_with_program=True),
         ControllerSpec('pass', 'ur_controllers/PassthroughTrajectoryController', PASS, stops_with_program=True),
-        ControllerSpec('free', 'ur_controllers/FreedriveModeController', FREE, unavailable='not emulated yet'),
+        ControllerSpec('free', 'ur_controllers/FreedriveModeController', FREE, unavailable='not on this robot'),
         ControllerSpec('tool', 'ur_controllers/ToolContactController', TOOL, stops_with_program=True),
     ]
     return ControllerManager(specs, active, lambda s, p, r: hw.prepare_command_mode_switch(s, p, r, PREFIX))
@@ -46,7 +48,7 @@ def _texts(plan) -> list[str]:
 
 def _switch(cm, activate=(), deactivate=(), strictness=STRICT):
     plan = cm.plan(activate, deactivate, strictness)
-    if plan.ok:
+    if plan.activate or plan.deactivate:
         cm.apply(plan)
     return plan
 
@@ -63,65 +65,76 @@ def test_plain_switch_deactivates_then_activates():
     cm = _manager()
     plan = _switch(cm, activate=['fpc'], deactivate=['scaled'])
     assert plan.ok and plan.deactivate == ('scaled',) and plan.activate == ('fpc',)
-    assert plan.message == SWITCHED
+    assert plan.message == SWITCHED  # STRICT: no lists appended
     assert cm.active_names() == ('jsb', 'fpc')
+    plan = _switch(cm, activate=['scaled', 'tool'], deactivate=['fpc'], strictness=BEST_EFFORT)
+    assert plan.message == (f'{SWITCHED}\nDeactivated controllers: [ fpc ]\n'
+                            'Activated controllers: [ scaled tool ]')
 
 
 def test_unknown_name_strict_fails_as_a_whole():
     cm = _manager()
     plan = _switch(cm, activate=['nope'], deactivate=['scaled'])
     assert not plan.ok and cm.is_active('scaled')
-    assert _texts(plan) == ["Could not 'activate' controller with name 'nope' because no controller with this name "
-                            'exists', ABORT_STRICT]
+    text = "Could not activate controller with name 'nope' because no controller with this name exists"
+    assert _texts(plan) == [text, ABORT_STRICT_UNKNOWN] and plan.message == text
 
 
 def test_unknown_name_best_effort_does_the_rest():
     cm = _manager()
     plan = _switch(cm, activate=['nope', 'fpc'], deactivate=['scaled'], strictness=BEST_EFFORT)
     assert plan.ok and plan.activate == ('fpc',) and cm.is_active('fpc') and not cm.is_active('scaled')
+    # A list none of whose names exist fails (upstream: the result of its last name, with nothing found before).
+    plan = _switch(cm, deactivate=['ghost', 'nope'], strictness=BEST_EFFORT)
+    assert not plan.ok and plan.message.count('because no controller with this name exists\n') == 2
+    assert cm.is_active('fpc')
 
 
 def test_activating_an_active_controller():
     cm = _manager()
     strict = _switch(cm, activate=['scaled'])
-    assert not strict.ok and "Controller with name 'scaled' is not inactive" in strict.message
+    assert not strict.ok and strict.message == "Controller with name 'scaled' is already active."
+    assert _texts(strict)[-1] == ABORT_STRICT
     best = _switch(cm, activate=['scaled'], strictness=BEST_EFFORT)
-    assert best.ok and best.activate == () and _texts(best)[-1] == EMPTY_SWITCH
-    # No restart in jazzy: an active controller in both lists cannot be activated, so STRICT fails...
-    assert not _switch(cm, activate=['scaled'], deactivate=['scaled']).ok
-    # ... and BEST_EFFORT only deactivates it.
-    plan = _switch(cm, activate=['scaled'], deactivate=['scaled'], strictness=BEST_EFFORT)
-    assert plan.ok and plan.deactivate == ('scaled',) and plan.activate == () and not cm.is_active('scaled')
+    assert best.ok and best.activate == () and best.message == NOTHING_TO_DO
+    # In both lists it is restarted: deactivated, then activated, keeping its interfaces.
+    plan = _switch(cm, activate=['scaled'], deactivate=['scaled'])
+    assert plan.ok and plan.deactivate == ('scaled',) and plan.activate == ('scaled',) and cm.is_active('scaled')
+
+
+def test_unconfigured_controller_cannot_be_activated():
+    cm = _manager()
+    cm.states['jtc'] = 'unconfigured'
+    plan = _switch(cm, activate=['jtc'], deactivate=['scaled'])
+    assert not plan.ok and plan.message.startswith("Controller with name 'jtc' is in 'unconfigured' state.")
+    assert cm.is_active('scaled')
 
 
 def test_deactivating_an_inactive_controller():
     cm = _manager()
     strict = _switch(cm, deactivate=['jtc', 'scaled'])
     assert not strict.ok and cm.is_active('scaled')
-    assert "Controller with name 'jtc' can not be deactivated since it is not active." in _texts(strict)
+    assert strict.message == "Controller with name 'jtc' can not be deactivated since it is not active."
     best = _switch(cm, deactivate=['jtc', 'scaled'], strictness=BEST_EFFORT)
     assert best.ok and best.deactivate == ('scaled',) and not cm.is_active('scaled')
+    # All already inactive: nothing to do, which succeeds (the driver's tests rely on it).
+    again = _switch(cm, deactivate=['jtc', 'scaled', 'fpc'], strictness=BEST_EFFORT)
+    assert again.ok and again.message == NOTHING_TO_DO
 
 
-def test_conflicting_claims_are_refused():
+def test_conflicting_claims_are_refused_whatever_the_strictness():
     cm = _manager()
-    # scaled keeps its position interfaces: the forward position controller cannot claim them.
-    plan = _switch(cm, activate=['fpc'])
-    assert not plan.ok and not cm.is_active('fpc')
-    assert f"Resource conflict for controller 'fpc'. Command interface '{POS[0]}' is already claimed" in plan.message
-    # Two that claim the same interfaces in one request.
+    for strictness in (STRICT, BEST_EFFORT):
+        # scaled keeps its position interfaces: the forward position controller cannot claim them.
+        plan = _switch(cm, activate=['fpc'], strictness=strictness)
+        assert not plan.ok and not cm.is_active('fpc')
+        assert plan.message == (f"Unable to activate controller 'fpc' since the command interface '{POS[0]}' is "
+                                'currently claimed by another controller.')
     _switch(cm, deactivate=['scaled'])
-    assert not _switch(cm, activate=['scaled', 'jtc']).ok
+    for strictness in (STRICT, BEST_EFFORT):  # two that claim the same interfaces in one request
+        plan = _switch(cm, activate=['scaled', 'jtc', 'tool'], strictness=strictness)
+        assert not plan.ok and 'will be used by another controller that is being activated' in plan.message
     assert cm.active_names() == ('jsb',)
-
-
-def test_best_effort_conflict_does_the_possible_part():
-    cm = _manager()
-    _switch(cm, deactivate=['scaled'])
-    plan = _switch(cm, activate=['scaled', 'jtc', 'tool'], strictness=BEST_EFFORT)
-    assert plan.ok and plan.activate == ('scaled', 'tool')
-    assert any('Resource conflict' in t and "'jtc'" in t for t in _texts(plan))
-    assert cm.active_names() == ('jsb', 'scaled', 'tool')
 
 
 def test_hardware_modes_refuse_whatever_the_strictness():
@@ -131,7 +144,7 @@ def test_hardware_modes_refuse_whatever_the_strictness():
         for strictness in (STRICT, BEST_EFFORT):
             plan = _switch(cm, activate=pair, strictness=strictness)
             assert not plan.ok, pair
-            assert _texts(plan)[-1] == HARDWARE_REJECTED and 'is not allowed' in _texts(plan)[-2]
+            assert plan.message == HARDWARE_REJECTED and 'is not allowed' in _texts(plan)[-2]
     assert cm.active_names() == ('jsb',)
     # A running position controller excludes velocity unless it is deactivated in the same request.
     _switch(cm, activate=['fpc'])
@@ -146,26 +159,54 @@ def test_tool_contact_runs_beside_position_and_passthrough():
     assert _switch(cm, activate=['pass', 'tool']).ok
 
 
-def test_unavailable_controller_cannot_be_activated():
-    cm = _manager()
-    strict = _switch(cm, activate=['free'], deactivate=['scaled'])
-    assert not strict.ok and 'not emulated yet' in strict.message and cm.is_active('scaled')
-    best = _switch(cm, activate=['free'], deactivate=['scaled'], strictness=BEST_EFFORT)
-    assert best.ok and best.activate == () and not cm.is_active('free')
+def test_failed_activation_fails_the_request():
+    cm = _manager(active=('scaled',))
+    strict = _switch(cm, activate=['free', 'jsb'], deactivate=['scaled'])
+    assert not strict.ok and 'not on this robot' in _texts(strict)[0]
+    assert strict.message == 'Failed switching controllers.... \nUnable to activate controllers: [ free  ]'
+    # The deactivation is done; with STRICT every activation of the request is undone.
+    assert cm.active_names() == ()
+    best = _switch(cm, activate=['free', 'jsb'], strictness=BEST_EFFORT)
+    assert not best.ok and best.activate == ('jsb',) and cm.active_names() == ('jsb',)
+
+
+def test_inactive_or_unconfigured_hardware_blocks_commanding_controllers():
+    hardware = hc.HardwareComponent('ur5e', 'plugin', hw.command_interfaces(JOINTS, PREFIX),
+                                    hw.joint_interfaces(JOINTS, 'position', 'velocity', 'effort'))
+    specs = [ControllerSpec('jsb', 'jsb', state_interfaces=hw.joint_interfaces(JOINTS, 'position')),
+             ControllerSpec('fpc', 'fpc', POS)]
+    cm = ControllerManager(specs, (), lambda s, p, r: None, hardware)
+    assert hardware.set_state(hc.INACTIVE).ok
+    plan = _switch(cm, activate=['fpc'])
+    assert not plan.ok and plan.message == HARDWARE_REJECTED
+    assert "Component 'ur5e' is in INACTIVE state, but has start interfaces to switch" in _texts(plan)[0]
+    assert _switch(cm, activate=['jsb']).ok  # state interfaces are still available
+    assert _switch(cm, deactivate=['jsb']).ok
+    assert hardware.set_state(hc.UNCONFIGURED).ok
+    plan = _switch(cm, activate=['fpc'])
+    assert plan.message == (f"Unable to activate controller 'fpc' since the command interface '{POS[0]}' is not "
+                            'available.')
+    plan = _switch(cm, activate=['jsb'])
+    assert plan.message == (f"Unable to activate controller 'jsb' since the state interface '{POS[0]}' is not "
+                            'available.')
+    assert hardware.set_state(hc.ACTIVE).ok and _switch(cm, activate=['fpc', 'jsb']).ok
+    assert cm.is_claimed(POS[0])
+    assert hardware.set_state(hc.UNCONFIGURED).ok
+    assert not cm.is_claimed(POS[0]) and cm.is_active('fpc')  # unavailable: never claimed, the controller runs on
 
 
 def test_strictness_zero_is_best_effort_and_bad_values_fail():
     cm = _manager()
-    plan = _switch(cm, activate=['nope'], strictness=0)
-    assert plan.ok and 'Defaulting to BEST_EFFORT' in _texts(plan)[0]
-    assert _switch(cm, activate=['nope'], strictness=FORCE_AUTO).ok  # no chains: as BEST_EFFORT
+    plan = _switch(cm, activate=['tool', 'nope'], strictness=0)
+    assert plan.ok and 'Defaulting to BEST_EFFORT' in _texts(plan)[0] and cm.is_active('tool')
+    assert _switch(cm, activate=['nope'], deactivate=['tool'], strictness=FORCE_AUTO).ok is False
     bad = _switch(cm, activate=['fpc'], deactivate=['scaled'], strictness=7)
     assert not bad.ok and 'strictness = 7' in bad.message and cm.is_active('scaled')
 
 
 def test_empty_request_succeeds():
     plan = _switch(_manager(), strictness=STRICT)
-    assert plan.ok and plan.message == EMPTY_SWITCH
+    assert plan.ok and plan.message == NOTHING_TO_DO
 
 
 def test_stale_plan_is_refused():

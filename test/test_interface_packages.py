@@ -84,6 +84,10 @@ UPSTREAM_HASHES = {
         'RIHS01_b5de498113f4eabc7b932e019ca0498d67304b1ca465fe8a426ea89644865ff9',
     'controller_manager_msgs/srv/CleanupController':
         'RIHS01_0e5e0da84cf97150abbb3a4e2249c67e6f43dba01ed9b7228b4deaab8838ec4b',
+    'controller_manager_msgs/srv/ReloadControllerLibraries':
+        'RIHS01_485cd0040f8a343a9596155b967363e1bc715f034bbb111f795c73d9d8056a9b',
+    'controller_manager_msgs/msg/ControllerManagerActivity':
+        'RIHS01_35b7de5d611b6780e89732de325f2f765eacdb8a7adfe5821a27af4a03a7c244',
     'tf2_msgs/msg/TF2Error': 'RIHS01_db2485e7d6a0ec75bf087e058ee45df682acc3a621ca7780503d10aac141809a',
 }
 

@@ -127,11 +127,13 @@ class Host:
                     remaining.append((condition, event))
             self._waiters[:] = remaining
 
-    def create_node(self, name: str) -> Node:
-        """A node named `name` in ur_sim's namespace, as ros2_control gives each controller one."""
+    def create_node(self, name: str, parameter_services: bool = False) -> Node:
+        """A node named `name` in ur_sim's namespace, as ros2_control gives each controller one. With
+        `parameter_services`, its parameters can be listed and set from outside, also undeclared ones (as the
+        controller manager's node allows)."""
         ns = self.cfg.namespace.strip('/')
         return Node(name, namespace=f'/{ns}' if ns else '/', context=self.context,
-                    start_parameter_services=False)
+                    start_parameter_services=parameter_services, allow_undeclared_parameters=parameter_services)
 
 
 def destroy_node(node: Node) -> None:
@@ -142,6 +144,25 @@ def destroy_node(node: Node) -> None:
         if destroy is not None:
             destroy()
     node.destroy_node()
+
+
+def unload_node(node: Node, timeout: float = 5.0) -> None:
+    """Take `node` out of the executor spinning it, then destroy it (a controller unloaded at run time).
+
+    rclpy's executor builds each wait set from a snapshot of its nodes taken at the top of an iteration, and a
+    waitable destroyed between the snapshot and the build raises InvalidHandle in the spinning thread. So after
+    ``remove_node`` this waits for two no-op tasks, the second created once the first has run: the second is taken
+    up in an iteration that began after the removal, so no wait set with the node's entities is built any more.
+    """
+    executor = node.executor
+    if executor is not None:
+        executor.remove_node(node)
+        for _ in range(2):
+            ran = threading.Event()
+            executor.create_task(ran.set)
+            if not ran.wait(timeout):  # not spinning (shutting down): nothing builds wait sets
+                break
+    destroy_node(node)
 
 
 class Component:
@@ -183,6 +204,12 @@ class Component:
         """Release the node (ur_sim is shutting down)."""
         if self.node is not None:
             destroy_node(self.node)
+            self.node = None
+
+    def unload(self) -> None:
+        """Release the node while the executor spins (unload_controller)."""
+        if self.node is not None:
+            unload_node(self.node)
             self.node = None
 
     def interfaces(self, cfg: SimConfig) -> tuple[tuple[str, ...], tuple[str, ...]]:

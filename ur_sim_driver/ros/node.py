@@ -149,6 +149,7 @@ class UrSimNode(Node):
         self.controller_manager = ControllerManagerNode(self.host, [c for c in self.components if c.is_controller])
         self._commanders = [c for c in self.components if isinstance(c, JointCommandController)]
         self._holder = HoldPosition()
+        self._last_read: tuple | None = None  # (state, tcp position, tcp orientation, wrench) the hardware last read
         self._commander: JointCommander | None = None
         self.controller_manager.program_state_changed(self._refusal)
 
@@ -279,7 +280,10 @@ class UrSimNode(Node):
             state = self.sim.state()
             self.robot.update(state.t)
             self._controller_stopper()
-            commander = next((c for c in self._commanders if c.active), self._holder)
+            hardware = self.controller_manager.hardware
+            # Commands reach the robot only while the hardware component writes (is active).
+            commander = next((c for c in self._commanders if c.active), self._holder) if hardware.writes \
+                else self._holder
             if commander is not self._commander:
                 commander.take_over(state)
                 self._commander = commander
@@ -302,7 +306,11 @@ class UrSimNode(Node):
                 self._controller_stopper()
             robot_factor, total_factor = self.scaling.factor, self.scaling.total
             self.host.check_waiters()
-        cycle = Cycle(self._cycle, state.t, conv.time_parts(state.t), state, sample, tau, robot_factor,
+        if hardware.reads or self._last_read is None:
+            self._last_read = (state, tcp_position, tcp_orientation, wrench)
+        # Not read (the driver is disconnected): the state interfaces keep the values last read.
+        measured, tcp_position, tcp_orientation, wrench = self._last_read
+        cycle = Cycle(self._cycle, state.t, conv.time_parts(state.t), measured, sample, tau, robot_factor,
                       total_factor, tcp_position, tcp_orientation, wrench)
         for component in self.components:
             if component.active:
