@@ -467,8 +467,8 @@ class RobotKeeper:
             self._call('power_on')
             self._call('brake_release')
             wait_for(lambda: robot.robot_mode == RUNNING, what='the robot mode RUNNING')
-        if not robot.program_running:
-            self._call('resend_robot_program')
+        if not robot.program_running:  # headless: the driver sends its program; else it is played on the robot
+            self._call('resend_robot_program' if self.h.sim.cfg.headless_mode else 'play')
         # The controller_stopper restores the controllers it stopped in the next cycle: wait for it, then compare.
         wait_for(lambda: self.h.sim._refusal is None, what='the robot ready to move and its controllers back')
         states = self.cm.states()
@@ -618,6 +618,8 @@ def running_sim(lockstep: bool | None = None, paced: bool = False, **params) -> 
     if lockstep is None:
         lockstep = 'real_time_factor' not in params
     params.setdefault('real_time_factor', 0.0)
+    # As the driver's own tests launch it: the driver sends its program itself (resend_robot_program works).
+    params.setdefault('headless_mode', True)
     with ros_context() as ctx:
         sim = UrSimNode(context=ctx, parameter_overrides=[_param(k, v) for k, v in _flatten(params).items()],
                         start=not (lockstep or paced))

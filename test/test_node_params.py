@@ -7,7 +7,7 @@ import threading
 import pytest
 from rclpy.parameter import Parameter
 from ros_helpers import ros_context
-from sim_harness import running_sim, wait_for
+from sim_harness import point, running_sim, wait_for
 
 from ur_sim_driver.errors import ConfigError
 from ur_sim_driver.ros.node import UrSimNode
@@ -36,6 +36,11 @@ def test_seed_ur10_preset_names_exist():
     ('tool', 'gripper', "'tool' = 'gripper' is invalid; valid choices: none, dispenser"),
     ('initial_positions', [0.0, 0.0, 4.0, 0.0, 0.0, 0.0], "'initial_positions' [2] = 4.0 rad is outside"),
     ('thread_priority', 120, "'thread_priority' = 120 must be an integer in [0, 99]"),
+    ('initial_joint_controller', 'forward_effort_controller',
+     "'initial_joint_controller' = 'forward_effort_controller' is not a joint controller of ur_sim; valid choices: "
+     'scaled_joint_trajectory_controller, joint_trajectory_controller, forward_velocity_controller'),
+    ('use_tool_communication', True, "'use_tool_communication' = True: the tool's serial (RS-485) bridge is not "
+                                     'simulated; valid: false'),
 ])
 def test_invalid_parameter_names_parameter_value_and_range(name, value, expected):
     with ros_context() as ctx, pytest.raises(ConfigError) as err:
@@ -92,3 +97,52 @@ def test_viewer_without_display_runs_headless(monkeypatch):
         t0 = h.sim.sim.time
         h.wait_sim_time(0.1)
         assert h.sim.sim.time > t0
+
+
+# ---- the driver's launch arguments (ur_control.launch.py) ------------------------------------------------------------
+def _active(h) -> set[str]:
+    return {name for name, state in h.keeper.cm.states().items() if state == 'active'}
+
+
+def test_initial_joint_controller_is_the_active_one():
+    with running_sim(initial_joint_controller='forward_velocity_controller') as h:
+        active = _active(h)
+        assert 'forward_velocity_controller' in active and 'scaled_joint_trajectory_controller' not in active
+        assert {'joint_state_broadcaster', 'io_and_status_controller'} <= active
+
+
+def test_no_joint_controller_active_holds_the_robot():
+    with running_sim(activate_joint_controller=False, initial_joint_controller='no_such_controller') as h:
+        # Not activated, the name is not checked (the launch file only removes it from the inactive list when
+        # activating it).
+        active = _active(h)
+        assert not active & {'scaled_joint_trajectory_controller', 'joint_trajectory_controller',
+                              'forward_position_controller', 'forward_velocity_controller'}
+        q0 = h.q.copy()
+        h.wait_sim_time(0.5)
+        assert abs(h.q - q0).max() < 1e-3
+        assert not h.send(h.goal([point(q0 + 0.1, 1.0, [0.0] * 6)])).accepted
+
+
+def test_without_the_dashboard_client():
+    with ros_context() as ctx:
+        sim = UrSimNode(context=ctx, parameter_overrides=[Parameter('launch_dashboard_client', value=False)],
+                        start=False)
+        try:
+            names = {node.get_name() for node in sim.nodes()}
+            assert 'dashboard_client' not in names and 'io_and_status_controller' in names
+        finally:
+            sim.shutdown()
+            sim.destroy_node()
+
+
+def test_resend_robot_program_needs_headless_mode():
+    with running_sim(headless_mode=False) as h:
+        answer = h.keeper.call('resend_robot_program')
+        assert not answer.success
+        assert answer.message == 'Tried to send robot program directly while not in headless mode'
+        # Without headless mode the External Control program is started on the robot.
+        with h.sim._lock:
+            h.sim.robot.stop()  # the program stopped on the robot (a user at the pendant)
+        assert h.keeper.call('play').success
+        wait_for(lambda: h.sim.robot.program_running, what='the External Control program playing')

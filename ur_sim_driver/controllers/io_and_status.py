@@ -17,7 +17,7 @@ Services, with upstream's semantics (ur_controllers/src/gpio_controller.cpp, jaz
 * ``~/set_speed_slider`` (ur_msgs/SetSpeedSliderFraction): 0.01 .. 1.0, else success false; the slider
   multiplies the robot's speed scaling (``speed_scaling.py``).
 * ``~/resend_robot_program``, ``~/hand_back_control`` (std_srvs/Trigger): the External Control program
-  plays again / ends (``robot_state.py``).
+  plays again (only in ``headless_mode``, as the driver sends its program only then) / ends (``robot_state.py``).
 * ``~/set_payload`` (ur_msgs/SetPayload), ``~/zero_ftsensor`` (std_srvs/Trigger): validated here, then
   applied by ``Simulator.set_payload`` / ``Simulator.zero_ftsensor``.
 
@@ -81,6 +81,9 @@ def payload_refusal(ur_type: str, mass: float, cog: np.ndarray, inertia: np.ndar
     if not (math.isfinite(transition_time) and transition_time >= 0.0):
         return f'transition_time = {transition_time} s is negative'
     return None
+
+
+NOT_HEADLESS = 'Tried to send robot program directly while not in headless mode'
 
 
 class IoAndStatusController(Component):
@@ -227,7 +230,10 @@ class IoAndStatusController(Component):
         return res
 
     def _on_resend_robot_program(self, req: Trigger.Request, res: Trigger.Response) -> Trigger.Response:
-        return self._robot_command(self.host.robot.resend_robot_program, 'Successfully resent robot program', res)
+        # The driver sends its program itself only in headless mode (UrDriver::sendRobotProgram); otherwise the
+        # External Control program is started on the robot (play).
+        resend = self.host.robot.resend_robot_program if self.host.cfg.headless_mode else (lambda: NOT_HEADLESS)
+        return self._robot_command(resend, 'Successfully resent robot program', res)
 
     def _on_hand_back_control(self, req: Trigger.Request, res: Trigger.Response) -> Trigger.Response:
         return self._robot_command(self.host.robot.hand_back_control, 'Deactivated control', res)

@@ -59,6 +59,12 @@ class SimConfig:
     publish_frequency: float = 20.0  # [Hz] of simulated time: robot_state_publisher's /tf
     dispenser: DispenserParams = DispenserParams()  # the glue dispenser's model (tool: dispenser only)
     software_version: SoftwareVersion | None = None  # the controller's software; None: the type's default
+    # The driver's launch arguments that change what a client sees (ur_control.launch.py, same names and defaults).
+    initial_joint_controller: str = 'scaled_joint_trajectory_controller'
+    activate_joint_controller: bool = True
+    launch_dashboard_client: bool = True
+    headless_mode: bool = False  # the driver sends its program itself; resend_robot_program works only then
+    use_tool_communication: bool = False  # the tool's RS-485 bridge: not simulated (true is refused)
 
     def __post_init__(self) -> None:
         if self.software_version is None:  # resolved once: every reader sees the version the robot runs
@@ -174,7 +180,20 @@ def sim_config_from_params(params: Mapping[str, Any]) -> SimConfig:
         publish_frequency=_number('publish_frequency', get('publish_frequency', d.publish_frequency), 0.0, 1000.0,
                                   lo_open=True),
         dispenser=dispenser_params(params),
+        initial_joint_controller=_ros_name('initial_joint_controller',
+                                           get('initial_joint_controller', d.initial_joint_controller)),
+        activate_joint_controller=bool(get('activate_joint_controller', d.activate_joint_controller)),
+        launch_dashboard_client=bool(get('launch_dashboard_client', d.launch_dashboard_client)),
+        headless_mode=bool(get('headless_mode', d.headless_mode)),
+        use_tool_communication=_tool_communication(get('use_tool_communication', d.use_tool_communication)),
     )
+
+
+def _tool_communication(value: Any) -> bool:
+    if bool(value):
+        raise ConfigError(f"parameter 'use_tool_communication' = {value!r}: the tool's serial (RS-485) bridge is not "
+                          'simulated; valid: false')
+    return False
 
 
 def _programs(value: Any) -> tuple[str, ...]:
@@ -188,8 +207,12 @@ def _programs(value: Any) -> tuple[str, ...]:
 
 
 def _controller_name(value: Any) -> str:
+    return _ros_name('controller_name', value)
+
+
+def _ros_name(parameter: str, value: Any) -> str:
     name = str(value)
     if not name or not all(c.isalnum() or c == '_' for c in name) or name[0].isdigit():
-        raise ConfigError(f"parameter 'controller_name' = {value!r} is not a valid ROS name "
+        raise ConfigError(f"parameter '{parameter}' = {value!r} is not a valid ROS name "
                           '(letters, digits and underscores, not starting with a digit)')
     return name

@@ -27,6 +27,7 @@ from rclpy.node import Node
 from rclpy.signals import SignalHandlerOptions
 from rosgraph_msgs.msg import Clock
 
+from ur_sim_driver.controllers import startup
 from ur_sim_driver.controllers.base import Component, Cycle, Host
 from ur_sim_driver.controllers.cdr_template import CdrTemplate
 from ur_sim_driver.controllers.controller_manager_node import ControllerManagerNode
@@ -105,6 +106,7 @@ class UrSimNode(Node):
 
         p = self.cfg.prefixed
         ctrl = self.cfg.controller_name
+        initial = startup.initial_joint_controller(self.cfg)  # checked before the gateway process starts
         self._pub_clock = self.create_publisher(Clock, '/clock', 10)
 
         params = self.sim.params
@@ -129,7 +131,7 @@ class UrSimNode(Node):
                                         self.sim.a_max, self.cfg.speed_scaling_initial_factor if name == ctrl else 1.0,
                                         scaling=self.scaling, scaled=name == ctrl)
             self._trajectory[name] = JointTrajectoryControllerComponent(name, core, self.gateway, feedback_every,
-                                                                        initially_active=name == ctrl)
+                                                                        initially_active=name == initial)
         # The robot's own interpolation for the passthrough controller: the JTC's sampler, scaled by the robot.
         self._passthrough = PassthroughTrajectoryController(
             TrajectoryController(self.joints, self._defaults, self.sim.state().q, params.v_max, self.sim.a_max,
@@ -138,10 +140,15 @@ class UrSimNode(Node):
         self._tool_contact = ToolContactController()
         self.components: list[Component] = [
             JointStateBroadcaster(), SpeedScalingStateBroadcaster(), TcpPoseBroadcaster(),
-            IoAndStatusController(), UrConfigurationController(), DashboardClient(), SimulatedInputs(),
+            IoAndStatusController(), UrConfigurationController(),
+            *((DashboardClient(),) if self.cfg.launch_dashboard_client else ()), SimulatedInputs(),
             ForceTorqueSensorBroadcaster(), RobotStatePublisher(), SimulatedDispenser(),
             *self._trajectory.values(), ForwardCommandController('position'), ForwardCommandController('velocity'),
             self._passthrough, FreedriveModeController(), self._tool_contact, AppliedWrenches()]
+        joint_controllers = startup.joint_controllers(self.cfg)
+        for component in self.components:
+            if component.name in joint_controllers:
+                component.initially_active = component.name == initial
         for component in self.components:
             component.configure(self.host)
             if component.initially_active:

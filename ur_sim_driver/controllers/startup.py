@@ -1,0 +1,40 @@
+"""Which controllers the driver's launch file starts active (``ur_control.launch.py`` at the pinned commit).
+
+The launch file spawns broadcasters and status controllers active, and the joint controllers inactive except
+``initial_joint_controller``, which it activates when ``activate_joint_controller`` is true (it removes that name
+from the inactive list, so a name not in the list fails the launch). ur_sim takes the same two parameters; its
+scaled trajectory controller is named by ``controller_name``, so the default ``scaled_joint_trajectory_controller``
+means that controller whatever its name.
+"""
+from __future__ import annotations
+
+from ur_sim_driver.errors import ConfigError
+from ur_sim_driver.robot.sim_config import SimConfig
+
+SCALED = 'scaled_joint_trajectory_controller'
+# The launch file's inactive list that ur_sim has (forward_effort_controller and force_mode_controller it has not).
+JOINT_CONTROLLERS = (SCALED, 'joint_trajectory_controller', 'forward_velocity_controller',
+                     'forward_position_controller', 'passthrough_trajectory_controller', 'freedrive_mode_controller',
+                     'tool_contact_controller')
+
+
+def joint_controllers(cfg: SimConfig) -> tuple[str, ...]:
+    """The names of the controllers the launch file spawns inactive, as ur_sim names them."""
+    names = [cfg.controller_name if n == SCALED else n for n in JOINT_CONTROLLERS]
+    return tuple(dict.fromkeys(names))
+
+
+def initial_joint_controller(cfg: SimConfig) -> str | None:
+    """The joint controller active after start, or None (``activate_joint_controller`` false).
+
+    Raises:
+        ConfigError: ``initial_joint_controller`` names no controller of the list, naming the valid ones.
+    """
+    if not cfg.activate_joint_controller:
+        return None
+    name = cfg.controller_name if cfg.initial_joint_controller == SCALED else cfg.initial_joint_controller
+    choices = joint_controllers(cfg)
+    if name not in choices:
+        raise ConfigError(f"parameter 'initial_joint_controller' = {cfg.initial_joint_controller!r} is not a joint "
+                          f"controller of ur_sim; valid choices: {', '.join(choices)}")
+    return name
