@@ -11,10 +11,11 @@ from rclpy.executors import SingleThreadedExecutor
 
 
 @contextmanager
-def ros_context() -> Iterator[Context]:
-    """A private rclpy Context, initialised and shut down around the block."""
+def ros_context(ros_args: list[str] | None = None) -> Iterator[Context]:
+    """A private rclpy Context, initialised (with `ros_args`, e.g. ['-p', 'node:name:=value']) and shut down around
+    the block."""
     context = Context()
-    rclpy.init(context=context)
+    rclpy.init(args=['--ros-args', *ros_args] if ros_args else None, context=context)
     try:
         yield context
     finally:

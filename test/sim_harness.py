@@ -604,7 +604,8 @@ def yaml_params(path) -> dict:
 
 
 @contextmanager
-def running_sim(lockstep: bool | None = None, paced: bool = False, **params) -> Iterator[SimHarness]:
+def running_sim(lockstep: bool | None = None, paced: bool = False, ros_args: list[str] | None = None,
+                **params) -> Iterator[SimHarness]:
     """ur_sim with a client, on a private context.
 
     By default in lockstep (:class:`Lockstep`): the simulation advances only while the test waits for something
@@ -620,7 +621,7 @@ def running_sim(lockstep: bool | None = None, paced: bool = False, **params) -> 
     params.setdefault('real_time_factor', 0.0)
     # As the driver's own tests launch it: the driver sends its program itself (resend_robot_program works).
     params.setdefault('headless_mode', True)
-    with ros_context() as ctx:
+    with ros_context(ros_args) as ctx:
         sim = UrSimNode(context=ctx, parameter_overrides=[_param(k, v) for k, v in _flatten(params).items()],
                         start=not (lockstep or paced))
         client = Node('test_client', context=ctx)

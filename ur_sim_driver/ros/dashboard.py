@@ -84,6 +84,12 @@ class DashboardClient(Component):
 
     def on_configure(self, host: Host, node: Node) -> None:
         self.server = DashboardServer(host.robot, host.cfg.ur_type, host.cfg.software_version, host.robot_files)
+        # The driver's dashboard client node parameter (set as `-p dashboard_client:autoconnect:=false`): without
+        # it the client starts disconnected and waits for ~/connect.
+        self.connected = bool(node.declare_parameter('autoconnect', True).value)
+        if not self.connected:
+            node.get_logger().info('Dashboard client started with autoconnect disabled. Call the ~/connect service '
+                                   'to connect to the simulated robot.')
         for name, command in TRIGGERS.items():
             node.create_service(Trigger, f'~/{name}', self._trigger_callback(command))
         node.create_service(Trigger, '~/connect', self._on_connect)
