@@ -17,6 +17,7 @@ from ur_sim_driver.controllers.controller_manager import (
     ControllerManager,
     ControllerSpec,
 )
+from ur_sim_driver.robot.software import SoftwareVersion
 
 JOINTS = tuple(f'p_{j}' for j in ('a', 'b', 'c', 'd', 'e', 'f'))
 PREFIX = 'p_'
@@ -238,3 +239,15 @@ def test_hardware_mode_table():
     assert hw.prepare_command_mode_switch(VEL, (), POS, PREFIX) == \
         'Starting velocity together with position is not allowed.'
     assert set(POS) | set(VEL) <= set(hw.command_interfaces(JOINTS, PREFIX))
+
+
+def test_effort_needs_torque_control():
+    eff = hw.joint_interfaces(JOINTS, 'effort')
+    assert hw.prepare_command_mode_switch(eff, (), (), PREFIX, SoftwareVersion(5, 12, 6)) == hw.EFFORT_TOO_OLD
+    assert hw.prepare_command_mode_switch(eff, (), (), PREFIX, SoftwareVersion(3, 15, 8)) == hw.EFFORT_TOO_OLD
+    # New enough: ur_sim has no torque control to run it.
+    assert hw.prepare_command_mode_switch(eff, (), (), PREFIX, SoftwareVersion(5, 23, 0)) == hw.EFFORT_NOT_SIMULATED
+    # Incompatible modes are named first, as upstream checks them first.
+    assert hw.prepare_command_mode_switch(eff + POS, (), (), PREFIX, SoftwareVersion(5, 12, 6)) == \
+        'Starting position together with effort is not allowed.'
+    assert hw.mode_of(hw.friction_interfaces(PREFIX)[0], PREFIX) is None  # the friction model starts no mode

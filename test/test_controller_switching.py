@@ -15,7 +15,9 @@ SCALED, JTC = 'scaled_joint_trajectory_controller', 'joint_trajectory_controller
 FPC, FVC = 'forward_position_controller', 'forward_velocity_controller'
 PASS, FREE, TOOL = 'passthrough_trajectory_controller', 'freedrive_mode_controller', 'tool_contact_controller'
 # The driver's test list (force_mode_controller is not loaded in ur_sim: BEST_EFFORT passes over it).
-ALL_CONTROLLERS = [SCALED, JTC, FPC, FVC, PASS, 'force_mode_controller', FREE]
+FRICTION = 'friction_model_controller'
+ALL_CONTROLLERS = [SCALED, JTC, FPC, FVC, PASS, 'force_mode_controller', FREE, FRICTION]
+EFFORT = 'forward_effort_controller'
 ZERO = [0.0] * 6
 
 
@@ -29,7 +31,8 @@ def robot():
 @pytest.fixture(autouse=True)
 def default_controllers(robot):
     """Every test starts from the driver's defaults: the scaled JTC is the active joint controller."""
-    robot.cm.switch(activate=[SCALED], deactivate=[c for c in ALL_CONTROLLERS if c != SCALED],
+    defaults = (SCALED, FRICTION)
+    robot.cm.switch(activate=defaults, deactivate=[c for c in ALL_CONTROLLERS if c not in defaults],
                     strictness=BEST_EFFORT)
     assert robot.cm.states()[SCALED] == 'active'
 
@@ -65,7 +68,9 @@ def test_default_set_as_the_driver_loads_it(robot):
     assert len(types.base_classes) == len(types.types)
     hardware = robot.cm.hardware()
     claimed = {i.name for i in hardware.command_interfaces if i.is_claimed}
-    assert claimed == set(position)
+    # The scaled JTC's and the friction model controller's (active by default, as the driver spawns it).
+    assert claimed == set(position) | {f'my_ur_friction_model/{n}' for n in (
+        *(f'viscous_{i}' for i in range(6)), *(f'coulomb_{i}' for i in range(6)), 'async_success')}
     assert {f'{j}/velocity' for j in robot.joints} <= {i.name for i in hardware.command_interfaces}
     assert f'{robot.joints[2]}/effort' in {i.name for i in hardware.state_interfaces}
 
@@ -96,7 +101,7 @@ def test_activating_controller_with_running_position_controller_fails(robot):
     cm = robot.cm
     assert cm.switch(activate=[SCALED], deactivate=[c for c in ALL_CONTROLLERS if c != SCALED],
                      strictness=BEST_EFFORT).ok
-    for name in (FPC, FVC, 'forward_effort_controller', FREE, PASS, 'force_mode_controller'):
+    for name in (FPC, FVC, EFFORT, FREE, PASS, 'force_mode_controller'):
         assert not cm.switch(activate=[name]).ok, name
     conflict = cm.switch(activate=[FPC], strictness=BEST_EFFORT)  # refused whatever the strictness
     assert not conflict.ok and conflict.message == (
@@ -137,6 +142,19 @@ def test_tool_contact_runs_beside_the_joint_controller_and_freedrive_alone(robot
     assert cm.switch(activate=[FREE], deactivate=[SCALED, TOOL]).ok
     assert cm.states()[FREE] == 'active'
     assert cm.switch(activate=[SCALED], deactivate=[FREE]).ok
+
+
+def test_effort_is_loaded_but_the_hardware_refuses_it(robot):
+    cm = robot.cm
+    controllers = cm.controllers()
+    assert controllers[EFFORT].type == 'effort_controllers/JointGroupEffortController'
+    assert controllers[EFFORT].state == 'inactive'
+    assert list(controllers[EFFORT].required_command_interfaces) == [f'{j}/effort' for j in robot.joints]
+    for strictness in (STRICT, BEST_EFFORT):  # robot software 5.12.6: torque control needs 5.23
+        response = cm.switch(activate=[EFFORT], deactivate=[SCALED], strictness=strictness)
+        assert (response.ok, response.message) == (False, 'Could not switch controllers since prepare command mode '
+                                                          'switch was rejected.')
+    assert cm.states()[SCALED] == 'active' and cm.states()[EFFORT] == 'inactive'
 
 
 def test_strictness_and_timeout_fields(robot):

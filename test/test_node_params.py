@@ -36,9 +36,13 @@ def test_seed_ur10_preset_names_exist():
     ('tool', 'gripper', "'tool' = 'gripper' is invalid; valid choices: none, dispenser"),
     ('initial_positions', [0.0, 0.0, 4.0, 0.0, 0.0, 0.0], "'initial_positions' [2] = 4.0 rad is outside"),
     ('thread_priority', 120, "'thread_priority' = 120 must be an integer in [0, 99]"),
-    ('initial_joint_controller', 'forward_effort_controller',
-     "'initial_joint_controller' = 'forward_effort_controller' is not a joint controller of ur_sim; valid choices: "
+    ('initial_joint_controller', 'force_mode_controller',
+     "'initial_joint_controller' = 'force_mode_controller' is not a joint controller of ur_sim; valid choices: "
      'scaled_joint_trajectory_controller, joint_trajectory_controller, forward_velocity_controller'),
+    ('initial_joint_controller', 'forward_effort_controller',
+     "'initial_joint_controller' = 'forward_effort_controller' cannot be activated: Requested to use effort interface "
+     "on a robot version that doesn't support it. Torque control is available from robot software 5.23.0 / 10.10.0 "
+     'on.; valid choices: scaled_joint_trajectory_controller'),
     ('use_tool_communication', True, "'use_tool_communication' = True: the tool's serial (RS-485) bridge is not "
                                      'simulated; valid: false'),
 ])

@@ -98,7 +98,8 @@ class ControllerManagerNode:
             _union(ur_hardware.state_interfaces(joints, cfg.tf_prefix), *(s.state_interfaces for s in specs)))
         self.manager = ControllerManager(
             specs, [c.name for c in components if c.initially_active],
-            lambda start, stop, running: ur_hardware.prepare_command_mode_switch(start, stop, running, cfg.tf_prefix),
+            lambda start, stop, running: ur_hardware.prepare_command_mode_switch(start, stop, running, cfg.tf_prefix,
+                                                                                 cfg.software_version),
             self.hardware)
         self.update_rate = int(round(host.sim.control_rate))
         self._pending: list[_Request] = []

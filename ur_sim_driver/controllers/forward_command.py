@@ -1,4 +1,5 @@
-"""forward_position_controller and forward_velocity_controller (ros2_controllers' JointGroup*Controller).
+"""forward_position_controller, forward_velocity_controller and forward_effort_controller (ros2_controllers'
+JointGroup*Controller).
 
 ``~/commands`` (std_msgs/Float64MultiArray): one value per joint in the controller's joint order, written to the
 joints' position or velocity command interfaces each cycle. On the UR these become servoj / speedj targets, which
@@ -9,6 +10,10 @@ so the velocity, acceleration and position limits hold as for any reference:
   there (a target beyond a position limit drives the joint into it: a protective stop, as on the robot);
 * velocity: the commanded velocities, reached at the robot's acceleration limit (the reference integrates a
   velocity ramped at that limit, so the servo can follow it exactly), capped at the velocity limits.
+
+forward_effort_controller is loaded, as the driver loads it, but cannot be activated: the hardware refuses effort
+mode on robot software older than 5.23.0 with the driver's words, and on newer software because ur_sim does not
+simulate torque control yet.
 
 A message with the wrong number of values or a non-finite value is refused with a log line naming it (upstream
 logs the size in its update and keeps the previous command; refusing it on arrival keeps the same command).
@@ -27,13 +32,14 @@ from std_msgs.msg import Float64MultiArray
 
 from ur_sim_driver.controllers.base import Host
 from ur_sim_driver.controllers.joint_command import JointCommandController
-from ur_sim_driver.controllers.ur_hardware import POSITION, VELOCITY, joint_interfaces, prefixed_joints
+from ur_sim_driver.controllers.ur_hardware import EFFORT, POSITION, VELOCITY, joint_interfaces, prefixed_joints
 from ur_sim_driver.motion.trajectory import TrajectorySample
 from ur_sim_driver.physics.physics import ArmState
 from ur_sim_driver.robot.sim_config import SimConfig
 
 TYPES = {POSITION: 'position_controllers/JointGroupPositionController',
-         VELOCITY: 'velocity_controllers/JointGroupVelocityController'}
+         VELOCITY: 'velocity_controllers/JointGroupVelocityController',
+         EFFORT: 'effort_controllers/JointGroupEffortController'}
 INACTIVE = "Can't accept new commands. subscriber is inactive"
 # A velocity reference stops integrating this far beyond a position limit: far enough that the joint is driven
 # into the limit (a protective stop, as a speedj into a limit gives), near enough to stop there at once.
@@ -51,7 +57,8 @@ def check_command(values: list[float] | np.ndarray, joints: tuple[str, ...]) -> 
 
 
 class ForwardCommandController(JointCommandController):
-    """One forward command controller: `kind` is 'position' or 'velocity'."""
+    """One forward command controller: `kind` is 'position', 'velocity' or 'effort' (loaded as the driver loads it;
+    the hardware refuses to start effort mode, see ``ur_hardware.prepare_command_mode_switch``)."""
 
     def __init__(self, kind: str) -> None:
         super().__init__()
@@ -103,6 +110,8 @@ class ForwardCommandController(JointCommandController):
         self._rd = np.zeros_like(self._r)
 
     def command(self, state: ArmState, period: float) -> tuple[TrajectorySample, np.ndarray | None]:
+        if self.kind == EFFORT:  # the hardware never starts effort mode, so no effort controller becomes active
+            raise AssertionError('forward_effort_controller is active, but ur_sim does not simulate torque control')
         zero = np.zeros_like(state.q)
         host = self.host
         if self.kind == POSITION:

@@ -8,14 +8,17 @@ means that controller whatever its name.
 """
 from __future__ import annotations
 
+from ur_sim_driver.controllers.ur_hardware import EFFORT_NOT_SIMULATED, EFFORT_TOO_OLD
 from ur_sim_driver.errors import ConfigError
 from ur_sim_driver.robot.sim_config import SimConfig
+from ur_sim_driver.robot.software import TORQUE_CONTROL, supports
 
 SCALED = 'scaled_joint_trajectory_controller'
-# The launch file's inactive list that ur_sim has (forward_effort_controller and force_mode_controller it has not).
+EFFORT = 'forward_effort_controller'
+# The launch file's inactive list that ur_sim has (force_mode_controller it has not).
 JOINT_CONTROLLERS = (SCALED, 'joint_trajectory_controller', 'forward_velocity_controller',
-                     'forward_position_controller', 'passthrough_trajectory_controller', 'freedrive_mode_controller',
-                     'tool_contact_controller')
+                     'forward_position_controller', EFFORT, 'passthrough_trajectory_controller',
+                     'freedrive_mode_controller', 'tool_contact_controller')
 
 
 def joint_controllers(cfg: SimConfig) -> tuple[str, ...]:
@@ -37,4 +40,8 @@ def initial_joint_controller(cfg: SimConfig) -> str | None:
     if name not in choices:
         raise ConfigError(f"parameter 'initial_joint_controller' = {cfg.initial_joint_controller!r} is not a joint "
                           f"controller of ur_sim; valid choices: {', '.join(choices)}")
+    if name == EFFORT:  # the driver's spawner would fail on the hardware's refusal; ur_sim says so at start
+        why = EFFORT_NOT_SIMULATED if supports(cfg.software_version, TORQUE_CONTROL) else EFFORT_TOO_OLD
+        raise ConfigError(f"parameter 'initial_joint_controller' = {name!r} cannot be activated: {why}; valid "
+                          f"choices: {', '.join(c for c in choices if c != EFFORT)}")
     return name

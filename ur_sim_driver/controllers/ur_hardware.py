@@ -13,6 +13,8 @@ from __future__ import annotations
 
 from collections.abc import Iterable
 
+from ur_sim_driver.robot.software import TORQUE_CONTROL, SoftwareVersion, supports
+
 POSITION, VELOCITY, EFFORT = 'position', 'velocity', 'effort'
 FORCE_MODE, PASSTHROUGH, FREEDRIVE, TOOL_CONTACT = 'force_mode', 'trajectory_passthrough', 'freedrive_mode', \
     'tool_contact'
@@ -42,8 +44,14 @@ def mode_of(interface: str, tf_prefix: str) -> str | None:
     return None
 
 
+EFFORT_TOO_OLD = ('Requested to use effort interface on a robot version that doesn\'t support it. Torque control is '
+                  'available from robot software 5.23.0 / 10.10.0 on.')
+EFFORT_NOT_SIMULATED = ('Requested to use effort interface: ur_sim does not simulate torque control (direct_torque) '
+                        'yet; use position, velocity or passthrough control')
+
+
 def prepare_command_mode_switch(start: Iterable[str], stop: Iterable[str], running: Iterable[str],
-                                tf_prefix: str) -> str | None:
+                                tf_prefix: str, version: SoftwareVersion | None = None) -> str | None:
     """What the hardware says to a switch: None when it can be done, else why not.
 
     Args:
@@ -51,6 +59,7 @@ def prepare_command_mode_switch(start: Iterable[str], stop: Iterable[str], runni
         stop: command interfaces the deactivating controllers release.
         running: command interfaces claimed now (before the switch).
         tf_prefix: the robot's tf_prefix (part of the GPIO interface names).
+        version: the robot's software (effort needs 5.23.0 / 10.10.0); None: not checked.
     """
     stopping = {m for m in (mode_of(i, tf_prefix) for i in stop) if m is not None}
     remaining = {m for m in (mode_of(i, tf_prefix) for i in running) if m is not None} - stopping
@@ -62,6 +71,10 @@ def prepare_command_mode_switch(start: Iterable[str], stop: Iterable[str], runni
             if not compatible(mode, other):
                 return f'Starting {mode} together with {other} is not allowed.'
         started.append(mode)
+    if EFFORT in started:
+        if version is not None and not supports(version, TORQUE_CONTROL):
+            return EFFORT_TOO_OLD
+        return EFFORT_NOT_SIMULATED
     for mode in started:
         for other in sorted(remaining):
             if not compatible(mode, other):
@@ -71,7 +84,7 @@ def prepare_command_mode_switch(start: Iterable[str], stop: Iterable[str], runni
 
 def command_interfaces(joints: Iterable[str], tf_prefix: str) -> tuple[str, ...]:
     """Every command interface the emulated hardware exports that moves the arm (joint and mode GPIOs)."""
-    names = [f'{j}/{kind}' for j in joints for kind in (POSITION, VELOCITY)]
+    names = [f'{j}/{kind}' for j in joints for kind in (POSITION, VELOCITY, EFFORT)]
     p = tf_prefix
     for i in range(6):
         names += [f'{p}{PASSTHROUGH}/setpoint_positions_{i}', f'{p}{PASSTHROUGH}/setpoint_velocities_{i}',
@@ -79,7 +92,14 @@ def command_interfaces(joints: Iterable[str], tf_prefix: str) -> tuple[str, ...]
     names += [f'{p}{PASSTHROUGH}/{n}' for n in ('abort', 'transfer_state', 'time_from_start', 'trajectory_size')]
     names += [f'{p}{FREEDRIVE}/{n}' for n in ('async_success', 'enable', 'abort')]
     names += [f'{p}{TOOL_CONTACT}/tool_contact_set_state']
-    return tuple(names)
+    return tuple(names) + friction_interfaces(tf_prefix)
+
+
+def friction_interfaces(tf_prefix: str) -> tuple[str, ...]:
+    """The friction model's command interfaces: 6 viscous and 6 Coulomb scales and the async success flag (they
+    start no mode)."""
+    p = f'{tf_prefix}friction_model/'
+    return (*(f'{p}viscous_{i}' for i in range(6)), *(f'{p}coulomb_{i}' for i in range(6)), f'{p}async_success')
 
 
 def state_interfaces(joints: Iterable[str], tf_prefix: str) -> tuple[str, ...]:

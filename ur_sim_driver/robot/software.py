@@ -115,3 +115,18 @@ def required(command: str, version: SoftwareVersion) -> SoftwareVersion | None:
     """The version `command` needs on this robot's series when `version` is older, else None (it is known)."""
     minimum = COMMANDS[command].of(version)
     return minimum if version[:3] < minimum[:3] else None
+
+
+# Features of the driver that need a minimum robot software (PolyScope 5, PolyScope X), as the driver and its client
+# library check them: torque control (hardware_interface.cpp, prepare_command_mode_switch) and friction scales for
+# it (ScriptCommandInterface::setFrictionScales).
+TORQUE_CONTROL = (_v('5.23.0'), _v('10.10.0'))
+FRICTION_SCALES = (_v('5.25.1'), _v('10.12.1'))
+
+
+def supports(version: SoftwareVersion, minima: tuple[SoftwareVersion, SoftwareVersion]) -> bool:
+    """`version` has a feature whose first versions are `minima` (PolyScope 5, PolyScope X); never on a CB3."""
+    polyscope5, polyscope_x = minima
+    if version.major < 5:
+        return False
+    return version[:3] >= (polyscope5 if version.major == 5 else polyscope_x)[:3]

@@ -35,6 +35,7 @@ from ur_sim_driver.controllers.dispenser import SimulatedDispenser
 from ur_sim_driver.controllers.force_torque_sensor_broadcaster import ForceTorqueSensorBroadcaster
 from ur_sim_driver.controllers.forward_command import ForwardCommandController
 from ur_sim_driver.controllers.freedrive_mode import FreedriveModeController
+from ur_sim_driver.controllers.friction_model import FrictionModelController
 from ur_sim_driver.controllers.io_and_status import IoAndStatusController
 from ur_sim_driver.controllers.joint_command import HoldPosition, JointCommandController, JointCommander
 from ur_sim_driver.controllers.joint_state_broadcaster import JointStateBroadcaster
@@ -140,10 +141,11 @@ class UrSimNode(Node):
         self._tool_contact = ToolContactController()
         self.components: list[Component] = [
             JointStateBroadcaster(), SpeedScalingStateBroadcaster(), TcpPoseBroadcaster(),
-            IoAndStatusController(), UrConfigurationController(),
+            IoAndStatusController(), UrConfigurationController(), FrictionModelController(),
             *((DashboardClient(),) if self.cfg.launch_dashboard_client else ()), SimulatedInputs(),
             ForceTorqueSensorBroadcaster(), RobotStatePublisher(), SimulatedDispenser(),
             *self._trajectory.values(), ForwardCommandController('position'), ForwardCommandController('velocity'),
+            ForwardCommandController('effort'),
             self._passthrough, FreedriveModeController(), self._tool_contact, AppliedWrenches()]
         joint_controllers = startup.joint_controllers(self.cfg)
         for component in self.components:
