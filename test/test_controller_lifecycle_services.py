@@ -151,3 +151,21 @@ def test_hardware_states_act_on_the_robot(robot):
     assert cm.switch(activate=[SCALED]).ok
     goal = h.send(h.goal([point(h.q - np.array([0.2, 0, 0, 0, 0, 0]), 2.0, ZERO)]))
     assert goal.accepted and h.result(goal)[1] == 0
+
+
+def test_hardware_starts_unconfigured_as_the_robot_models_test_starts_it():
+    """hardware_components_initial_state: the component waits unconfigured, no controller runs, the program does not
+    play; configured and activated, the robot works."""
+    with running_sim(hardware_components_initial_state={'unconfigured': ['ur5e']}) as h:
+        cm = ControllerManagerClient(h)
+        (component,) = cm.components()
+        assert (component.name, component.state.id) == ('ur5e', UNCONFIGURED)
+        assert 'active' not in cm.states().values()
+        assert not h.sim.robot.program_running
+        response = cm.set_component_state('ur5e', INACTIVE, 'inactive')
+        assert response.ok and (response.state.id, response.state.label) == (INACTIVE, 'inactive')
+        assert cm.set_component_state('ur5e', ACTIVE).ok
+        assert cm.switch(activate=['joint_state_broadcaster', SCALED]).ok
+        assert h.keeper.call('resend_robot_program').success
+        goal = h.send(h.goal([point(h.q + np.array([0.1, 0, 0, 0, 0, 0]), 1.0, ZERO)]))
+        assert goal.accepted and h.result(goal)[1] == 0

@@ -43,6 +43,9 @@ def test_seed_ur10_preset_names_exist():
      "'initial_joint_controller' = 'forward_effort_controller' cannot be activated: Requested to use effort interface "
      "on a robot version that doesn't support it. Torque control is available from robot software 5.23.0 / 10.10.0 "
      'on.; valid choices: scaled_joint_trajectory_controller'),
+    ('hardware_components_initial_state.unconfigured', ['ur20'],
+     "'hardware_components_initial_state.unconfigured' = ['ur20'] names an unknown hardware component 'ur20'; valid: "
+     'ur5e (the component is named after ur_type)'),
     ('use_tool_communication', True, "'use_tool_communication' = True: the tool's serial (RS-485) bridge is not "
                                      'simulated; valid: false'),
 ])

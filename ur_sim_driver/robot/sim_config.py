@@ -65,6 +65,9 @@ class SimConfig:
     launch_dashboard_client: bool = True
     headless_mode: bool = False  # the driver sends its program itself; resend_robot_program works only then
     use_tool_communication: bool = False  # the tool's RS-485 bridge: not simulated (true is refused)
+    # The controller manager's hardware_components_initial_state.{unconfigured, inactive} (lists of component names),
+    # resolved for ur_sim's one component (named after ur_type): 'unconfigured', 'inactive' or 'active'.
+    hardware_components_initial_state: str = 'active'
 
     def __post_init__(self) -> None:
         if self.software_version is None:  # resolved once: every reader sees the version the robot runs
@@ -186,7 +189,25 @@ def sim_config_from_params(params: Mapping[str, Any]) -> SimConfig:
         launch_dashboard_client=bool(get('launch_dashboard_client', d.launch_dashboard_client)),
         headless_mode=bool(get('headless_mode', d.headless_mode)),
         use_tool_communication=_tool_communication(get('use_tool_communication', d.use_tool_communication)),
+        hardware_components_initial_state=_initial_hardware_state(params, ur_type),
     )
+
+
+def _initial_hardware_state(params: Mapping[str, Any], component: str) -> str:
+    """The hardware component's state at start from the controller manager's two lists; the component is named
+    after ur_type, as the driver's description names it."""
+    state = 'active'
+    for label in ('unconfigured', 'inactive'):
+        key = f'hardware_components_initial_state.{label}'
+        value = params.get(key, [])
+        names = [value] if isinstance(value, str) else list(value)
+        for name in names:
+            if name != component:
+                raise ConfigError(f"parameter '{key}' = {names!r} names an unknown hardware component {name!r}; "
+                                  f'valid: {component} (the component is named after ur_type)')
+        if names and state == 'active':
+            state = label
+    return state
 
 
 def _tool_communication(value: Any) -> bool:
