@@ -57,6 +57,7 @@ from ur_sim_driver.robot.sim_config import SimConfig, sim_config_from_params
 from ur_sim_driver.robot.simulator import Simulator
 from ur_sim_driver.robot.speed_scaling import RobotSpeedScaling
 from ur_sim_driver.ros.dashboard import DashboardClient
+from ur_sim_driver.ros.robot_state_helper import RobotStateHelper
 from ur_sim_driver.ros.robot_state_publisher import RobotStatePublisher
 from ur_sim_driver.ros.sim_io import SimulatedInputs
 from ur_sim_driver.ros.sim_wrench import AppliedWrenches
@@ -142,7 +143,7 @@ class UrSimNode(Node):
         self.components: list[Component] = [
             JointStateBroadcaster(), SpeedScalingStateBroadcaster(), TcpPoseBroadcaster(),
             IoAndStatusController(), UrConfigurationController(), FrictionModelController(),
-            *((DashboardClient(),) if self.cfg.launch_dashboard_client else ()), SimulatedInputs(),
+            *((DashboardClient(),) if self.cfg.launch_dashboard_client else ()), RobotStateHelper(), SimulatedInputs(),
             ForceTorqueSensorBroadcaster(), RobotStatePublisher(), SimulatedDispenser(),
             *self._trajectory.values(), ForwardCommandController('position'), ForwardCommandController('velocity'),
             ForwardCommandController('effort'),
