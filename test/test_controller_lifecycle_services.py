@@ -12,12 +12,32 @@ from rclpy.parameter import Parameter
 from sim_harness import point, running_sim, wait_answer, wait_for, wait_still
 from std_msgs.msg import Float64MultiArray
 
+from ur_sim_driver.controllers.ur_hardware import friction_interfaces
 from ur_sim_driver.robot.robot_state import STOPPED
 
 SCALED, FVC = 'scaled_joint_trajectory_controller', 'forward_velocity_controller'
 ZERO = [0.0] * 6
 UNCONFIGURED, INACTIVE, ACTIVE = (State.PRIMARY_STATE_UNCONFIGURED, State.PRIMARY_STATE_INACTIVE,
                                   State.PRIMARY_STATE_ACTIVE)
+
+
+def test_hardware_starts_unconfigured_as_the_robot_models_test_starts_it():
+    """hardware_components_initial_state: the component waits unconfigured, no controller runs, the program does not
+    play; configured and activated, the robot works."""
+    # First: its ur_sim shares the test process's domain, so it must be gone before the module's starts.
+    with running_sim(hardware_components_initial_state={'unconfigured': ['ur5e']}) as h:
+        cm = ControllerManagerClient(h)
+        (component,) = cm.components()
+        assert (component.name, component.state.id) == ('ur5e', UNCONFIGURED)
+        assert 'active' not in cm.states().values()
+        assert not h.sim.robot.program_running
+        response = cm.set_component_state('ur5e', INACTIVE, 'inactive')
+        assert response.ok and (response.state.id, response.state.label) == (INACTIVE, 'inactive')
+        assert cm.set_component_state('ur5e', ACTIVE).ok
+        assert cm.switch(activate=['joint_state_broadcaster', SCALED]).ok
+        assert h.keeper.call('resend_robot_program').success
+        goal = h.send(h.goal([point(h.q + np.array([0.1, 0, 0, 0, 0, 0]), 1.0, ZERO)]))
+        assert goal.accepted and h.result(goal)[1] == 0
 
 
 @pytest.fixture(scope='module')
@@ -96,7 +116,8 @@ def test_component_lifecycle_as_the_driver_tests_it(robot):
     assert (c.state.id, c.state.label) == (ACTIVE, 'active')
     assert all(i.is_available for i in (*c.command_interfaces, *c.state_interfaces))
     claimed = {i.name for i in c.command_interfaces if i.is_claimed}
-    assert claimed == {f'{j}/position' for j in robot.joints}  # the scaled JTC's
+    # The scaled JTC's and the friction model controller's
+    assert claimed == {f'{j}/position' for j in robot.joints} | set(friction_interfaces(''))
     for target, label, available in ((INACTIVE, 'inactive', True), (UNCONFIGURED, 'unconfigured', False),
                                      (ACTIVE, 'active', True)):
         response = cm.set_component_state('ur5e', target)
@@ -151,21 +172,3 @@ def test_hardware_states_act_on_the_robot(robot):
     assert cm.switch(activate=[SCALED]).ok
     goal = h.send(h.goal([point(h.q - np.array([0.2, 0, 0, 0, 0, 0]), 2.0, ZERO)]))
     assert goal.accepted and h.result(goal)[1] == 0
-
-
-def test_hardware_starts_unconfigured_as_the_robot_models_test_starts_it():
-    """hardware_components_initial_state: the component waits unconfigured, no controller runs, the program does not
-    play; configured and activated, the robot works."""
-    with running_sim(hardware_components_initial_state={'unconfigured': ['ur5e']}) as h:
-        cm = ControllerManagerClient(h)
-        (component,) = cm.components()
-        assert (component.name, component.state.id) == ('ur5e', UNCONFIGURED)
-        assert 'active' not in cm.states().values()
-        assert not h.sim.robot.program_running
-        response = cm.set_component_state('ur5e', INACTIVE, 'inactive')
-        assert response.ok and (response.state.id, response.state.label) == (INACTIVE, 'inactive')
-        assert cm.set_component_state('ur5e', ACTIVE).ok
-        assert cm.switch(activate=['joint_state_broadcaster', SCALED]).ok
-        assert h.keeper.call('resend_robot_program').success
-        goal = h.send(h.goal([point(h.q + np.array([0.1, 0, 0, 0, 0, 0]), 1.0, ZERO)]))
-        assert goal.accepted and h.result(goal)[1] == 0

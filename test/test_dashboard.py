@@ -78,6 +78,17 @@ class Dashboard:
         wait_for(lambda: self.h.sim.robot.motion_refusal() is None, what='the robot ready to move')
 
 
+def test_autoconnect_disabled_waits_for_connect():
+    """The driver's dashboard client node parameter autoconnect: false starts it disconnected."""
+    # Before the module's ur_sim exists: both would share the test process's domain.
+    with running_sim(ros_args=['-p', 'dashboard_client:autoconnect:=false']) as h:
+        d = Dashboard(h)
+        r = d.call('get_robot_mode')
+        assert (r.success, r.answer) == (False, NOT_CONNECTED)
+        assert d.ok('connect')
+        assert d.ok('get_robot_mode').answer == 'Robotmode: RUNNING'
+
+
 @pytest.fixture(scope='module')
 def h():
     with running_sim() as harness:
@@ -337,13 +348,3 @@ def test_restart_safety_and_shutdown(d):
     assert d.call('get_robot_mode').answer == NOT_CONNECTED
     d.ok('connect')
     assert d.ok('get_robot_mode').robot_mode.mode == RobotMode.POWER_OFF
-
-
-def test_autoconnect_disabled_waits_for_connect():
-    """The driver's dashboard client node parameter autoconnect: false starts it disconnected."""
-    with running_sim(ros_args=['-p', 'dashboard_client:autoconnect:=false']) as h:
-        d = Dashboard(h)
-        r = d.call('get_robot_mode')
-        assert (r.success, r.answer) == (False, NOT_CONNECTED)
-        assert d.ok('connect')
-        assert d.ok('get_robot_mode').answer == 'Robotmode: RUNNING'

@@ -28,6 +28,13 @@ def _component(h):
     return next(c for c in h.sim.components if c.name == NAME)
 
 
+def test_older_robot_software_refuses():
+    # First: its ur_sim shares the test process's domain, so it must be gone before the module's starts.
+    with running_sim() as h:  # 5.12.6: the client library's setFrictionScales needs 5.25.1
+        assert not _set(h, _client(h), **GOOD)
+        assert _component(h).scales is None
+
+
 @pytest.fixture(scope='module')
 def robot():
     with running_sim(software_version='5.25.1') as h:
@@ -61,8 +68,3 @@ def test_refusals(robot):
         assert robot.cm.switch(activate=[NAME], strictness=STRICT).ok
     assert _component(robot).scales is before  # nothing refused was kept
 
-
-def test_older_robot_software_refuses():
-    with running_sim() as h:  # 5.12.6: the client library's setFrictionScales needs 5.25.1
-        assert not _set(h, _client(h), **GOOD)
-        assert _component(h).scales is None

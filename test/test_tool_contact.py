@@ -11,7 +11,7 @@ from cm_helpers import BEST_EFFORT, ControllerManagerClient
 from control_msgs.action import FollowJointTrajectory
 from rclpy.callback_groups import ReentrantCallbackGroup
 from sim_harness import ready_action, running_sim, wait_for, wait_still
-from ur_msgs.action import ToolContact
+from ur_msgs.action import FollowJointTrajectoryUntil, ToolContact
 
 from ur_glue_planner.execution.action_client import ActionClient
 from ur_glue_planner.execution.ros_conversions import joint_trajectory
@@ -213,3 +213,27 @@ def test_a_slow_approach_ends_in_tool_contact_never_in_a_protective_stop(scene, 
     h.wait_sim_time(0.5)
     assert np.abs(h.q - q).max() < 1e-4
     assert h.sim.robot.safety_mode == NORMAL, h.sim.robot.stop_cause
+
+
+def test_trajectory_until_tool_contact_ends_the_touch_early(scene):
+    """The driver's trajectory_until_node: the touch move with until TOOL_CONTACT ends triggered and successful."""
+    h, seg, cm, tc = scene
+    move_to_start(h, seg)
+    assert cm.switch(activate=[NAME]).ok
+    until = ActionClient(h.client, FollowJointTrajectoryUntil, '/trajectory_until_node/execute',
+                         callback_group=ReentrantCallbackGroup())
+    # (the client stays until the harness's client node goes, after its executor stopped)
+    ready_action(until, probe_goals=False)
+    goal = FollowJointTrajectoryUntil.Goal(trajectory=goal_of(h, seg).trajectory,
+                                           until_type=FollowJointTrajectoryUntil.Goal.TOOL_CONTACT)
+    future = until.send_goal_async(goal)
+    wait_still(future.done, timeout=30.0, what='the until goal answer')
+    handle = future.result()
+    assert handle.accepted
+    result_future = handle.get_result_async()
+    wait_for(result_future.done, 30.0, 'the until result')
+    result = result_future.result()
+    assert result.status == GoalStatus.STATUS_SUCCEEDED
+    assert result.result.until_condition_result == FollowJointTrajectoryUntil.Result.TRIGGERED
+    assert result.result.error_code == FollowJointTrajectoryUntil.Result.SUCCESSFUL
+    assert h.sim.robot.safety_mode == NORMAL

@@ -61,6 +61,7 @@ from ur_sim_driver.ros.robot_state_helper import RobotStateHelper
 from ur_sim_driver.ros.robot_state_publisher import RobotStatePublisher
 from ur_sim_driver.ros.sim_io import SimulatedInputs
 from ur_sim_driver.ros.sim_wrench import AppliedWrenches
+from ur_sim_driver.ros.trajectory_until import TrajectoryUntilNode
 from ur_sim_driver.spin_thread import SpinThread
 
 GIL_SWITCH_INTERVAL = 2e-4  # [s]
@@ -143,7 +144,8 @@ class UrSimNode(Node):
         self.components: list[Component] = [
             JointStateBroadcaster(), SpeedScalingStateBroadcaster(), TcpPoseBroadcaster(),
             IoAndStatusController(), UrConfigurationController(), FrictionModelController(),
-            *((DashboardClient(),) if self.cfg.launch_dashboard_client else ()), RobotStateHelper(), SimulatedInputs(),
+            *((DashboardClient(),) if self.cfg.launch_dashboard_client else ()), RobotStateHelper(),
+            TrajectoryUntilNode(), SimulatedInputs(),
             ForceTorqueSensorBroadcaster(), RobotStatePublisher(), SimulatedDispenser(),
             *self._trajectory.values(), ForwardCommandController('position'), ForwardCommandController('velocity'),
             ForwardCommandController('effort'),
