@@ -12,7 +12,7 @@ from rclpy.parameter import Parameter
 from sim_harness import point, running_sim, wait_answer, wait_for, wait_still
 from std_msgs.msg import Float64MultiArray
 
-from ur_sim_driver.controllers.ur_hardware import friction_interfaces
+from ur_sim_driver.controllers.ur_hardware import friction_interfaces, gravity_interfaces
 from ur_sim_driver.robot.robot_state import STOPPED
 
 SCALED, FVC = 'scaled_joint_trajectory_controller', 'forward_velocity_controller'
@@ -116,8 +116,9 @@ def test_component_lifecycle_as_the_driver_tests_it(robot):
     assert (c.state.id, c.state.label) == (ACTIVE, 'active')
     assert all(i.is_available for i in (*c.command_interfaces, *c.state_interfaces))
     claimed = {i.name for i in c.command_interfaces if i.is_claimed}
-    # The scaled JTC's and the friction model controller's
-    assert claimed == {f'{j}/position' for j in robot.joints} | set(friction_interfaces(''))
+    # The scaled JTC's, the friction model's and the gravity update's
+    assert claimed == {f'{j}/position' for j in robot.joints} | set(friction_interfaces('')) | \
+        set(gravity_interfaces(''))
     for target, label, available in ((INACTIVE, 'inactive', True), (UNCONFIGURED, 'unconfigured', False),
                                      (ACTIVE, 'active', True)):
         response = cm.set_component_state('ur5e', target)

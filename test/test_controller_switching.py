@@ -9,6 +9,7 @@ from action_msgs.msg import GoalStatus
 from cm_helpers import BEST_EFFORT, STRICT, ControllerManagerClient
 from sim_harness import point, running_sim, trajectory, wait_for
 
+from ur_sim_driver.controllers.ur_hardware import friction_interfaces, gravity_interfaces
 from ur_sim_driver.motion import result_codes as rc
 
 SCALED, JTC = 'scaled_joint_trajectory_controller', 'joint_trajectory_controller'
@@ -68,9 +69,8 @@ def test_default_set_as_the_driver_loads_it(robot):
     assert len(types.base_classes) == len(types.types)
     hardware = robot.cm.hardware()
     claimed = {i.name for i in hardware.command_interfaces if i.is_claimed}
-    # The scaled JTC's and the friction model controller's (active by default, as the driver spawns it).
-    assert claimed == set(position) | {f'my_ur_friction_model/{n}' for n in (
-        *(f'viscous_{i}' for i in range(6)), *(f'coulomb_{i}' for i in range(6)), 'async_success')}
+    # The scaled JTC's, the friction model's and the gravity update's (active by default, as the driver spawns them).
+    assert claimed == set(position) | set(friction_interfaces('my_ur_')) | set(gravity_interfaces('my_ur_'))
     assert {f'{j}/velocity' for j in robot.joints} <= {i.name for i in hardware.command_interfaces}
     assert f'{robot.joints[2]}/effort' in {i.name for i in hardware.state_interfaces}
 

@@ -61,6 +61,10 @@ def test_refusals(robot):
     before = _component(robot).scales
     assert not _set(robot, robot.friction, viscous_scale=[0.5] * 5, coulomb_scale=[0.5] * 6)
     assert not _set(robot, robot.friction, viscous_scale=[0.5] * 6, coulomb_scale=[0.5] * 7)
+    with robot.sim._lock:
+        robot.sim.robot.stop()  # no External Control program: no script command socket
+    assert not _set(robot, robot.friction, **GOOD)
+    robot.keeper.recover()
     assert robot.cm.switch(deactivate=[NAME], strictness=STRICT).ok
     try:
         assert not _set(robot, robot.friction, **GOOD)  # inactive

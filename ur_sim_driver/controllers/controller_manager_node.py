@@ -44,7 +44,7 @@ from rclpy.qos import DurabilityPolicy, QoSProfile, ReliabilityPolicy
 
 from ur_sim_driver.controllers import controller_lifecycle as lifecycle
 from ur_sim_driver.controllers import hardware_component as hwc
-from ur_sim_driver.controllers import ur_hardware
+from ur_sim_driver.controllers import startup, ur_hardware
 from ur_sim_driver.controllers.base import Component, Host
 from ur_sim_driver.controllers.controller_manager import (
     ACTIVE,
@@ -134,7 +134,7 @@ class ControllerManagerNode:
     def _spec(self, c: Component) -> ControllerSpec:
         command, state = c.interfaces(self.host.cfg)
         return ControllerSpec(c.name, c.type_name, command, state, getattr(c, 'unavailable', None),
-                              stops_with_program=bool(command))
+                              stops_with_program=c.name not in startup.CONSISTENT)
 
     @property
     def pending(self) -> bool:

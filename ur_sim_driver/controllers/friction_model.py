@@ -8,7 +8,8 @@ one per joint. Facts from the driver (``friction_model_controller.cpp``) and its
 * refused while the controller is inactive ("Can't accept new requests. Controller is not running.");
 * each list must have exactly 6 elements, else refused naming the list and its length;
 * the robot's software must be 5.25.1 (PolyScope 5) or later, else the client library warns that the command has
-  no effect and the answer is false;
+  no effect and the answer is false; the External Control program must run (the scales go through its script
+  command socket), else the answer is false too;
 * the scales are clamped to [0, 1] and sent to the robot, where they scale the friction compensation of
   ``direct_torque``. The robot keeps them (:attr:`FrictionModelController.scales`, restored when the controller is
   activated again, as upstream does); they act only under torque control, which ur_sim does not simulate yet, so
@@ -67,6 +68,9 @@ class FrictionModelController(Component):
             five, x = FRICTION_SCALES
             logger.warning(f'setFrictionScales is only available for robots with PolyScope {five} / {x} or later. '
                            f"This robot's version is {version}. This command will have no effect.")
+            logger.error('Could not set the friction model parameters.')
+        elif not self.host.robot.program_running:  # the scales go through the program's script command socket
+            logger.error('Script command interface is not running. Unable to set friction scales.')
             logger.error('Could not set the friction model parameters.')
         else:
             with self.host.lock:

@@ -45,3 +45,10 @@ def initial_joint_controller(cfg: SimConfig) -> str | None:
         raise ConfigError(f"parameter 'initial_joint_controller' = {name!r} cannot be activated: {why}; valid "
                           f"choices: {', '.join(c for c in choices if c != EFFORT)}")
     return name
+
+
+# The controller_stopper's "consistent_controllers" (the launch file's list): these keep running while the robot
+# cannot move; every other active controller is deactivated then and activated again afterwards.
+CONSISTENT = ('io_and_status_controller', 'force_torque_sensor_broadcaster', 'joint_state_broadcaster',
+              'speed_scaling_state_broadcaster', 'tcp_pose_broadcaster', 'ur_configuration_controller',
+              'gravity_update_controller')

@@ -92,7 +92,12 @@ def command_interfaces(joints: Iterable[str], tf_prefix: str) -> tuple[str, ...]
     names += [f'{p}{PASSTHROUGH}/{n}' for n in ('abort', 'transfer_state', 'time_from_start', 'trajectory_size')]
     names += [f'{p}{FREEDRIVE}/{n}' for n in ('async_success', 'enable', 'abort')]
     names += [f'{p}{TOOL_CONTACT}/tool_contact_set_state']
-    return tuple(names) + friction_interfaces(tf_prefix)
+    return tuple(names) + friction_interfaces(tf_prefix) + gravity_interfaces(tf_prefix)
+
+
+def gravity_interfaces(tf_prefix: str) -> tuple[str, ...]:
+    """The gravity update's command interfaces: the vector and the async success flag (they start no mode)."""
+    return tuple(f'{tf_prefix}gravity/{n}' for n in ('x', 'y', 'z', 'gravity_async_success'))
 
 
 def friction_interfaces(tf_prefix: str) -> tuple[str, ...]:

@@ -124,6 +124,9 @@ class ArmPhysics:
         self._i_qpos = np.array([int(m.jnt_qposadr[j]) for j in jids], dtype=np.int64)
         self._i_dof = np.array([int(m.jnt_dofadr[j]) for j in jids], dtype=np.int64)
         self._i_act = np.array([self._actuator_for(j) for j in jids], dtype=np.int64)
+        # The arm's moving part (first joint's body and everything it carries: links, tool, payload).
+        self._arm_root = int(m.jnt_bodyid[jids[0]])
+        self._jac = np.zeros((3, m.nv))
 
     def _actuator_for(self, joint_id: int) -> int:
         m = self.model
@@ -159,6 +162,18 @@ class ArmPhysics:
     def positions(self) -> np.ndarray:
         """(n,) joint positions now [rad]."""
         return self._d_qpos[self._qpos].copy()
+
+    def gravity_in_base(self) -> np.ndarray:
+        """(3,) the gravitational acceleration [m/s^2] the arm is under, in the base frame."""
+        return self.data.xmat[self._base].reshape(3, 3).T @ self.model.opt.gravity
+
+    def gravity_torques(self, g_base: np.ndarray) -> np.ndarray:
+        """(n,) joint torques [N m] that hold the arm, tool and payload still at the current positions under a
+        gravitational acceleration `g_base` (3,) [m/s^2] in the base frame."""
+        m, d = self.model, self.data
+        g_world = d.xmat[self._base].reshape(3, 3) @ np.asarray(g_base, dtype=float)
+        mujoco.mj_jacSubtreeCom(m, d, self._jac, self._arm_root)
+        return -float(m.body_subtreemass[self._arm_root]) * (self._jac[:, self._i_dof].T @ g_world)
 
     def dynamics(self) -> tuple[np.ndarray, np.ndarray]:
         """M(q) (n, n) [kg m^2] and h(q, qd) = gravity + Coriolis - passive (n,) [N m] at the current state."""

@@ -101,6 +101,9 @@ class Simulator:
         self.io = IoBank()
         self.payload: Payload = NO_PAYLOAD
         self._ft_offset = np.zeros(6)
+        # The gravity the robot's controller believes in (set_gravity: anti-gravity in the base frame [m/s^2]);
+        # None: the one the arm is under, as a correctly installed robot's.
+        self.gravity_belief: np.ndarray | None = None
 
     @property
     def time(self) -> float:
@@ -117,7 +120,7 @@ class Simulator:
         The robot's servo turns the reference into a setpoint within the joint limits (``servo.py``), never
         passing `stop` (n,) [rad]; the computed-torque controller tracks the setpoint.
         """
-        mass, bias = self.physics.dynamics()
+        mass, bias = self._dynamics()
         # The joints' reachable accelerations, the servo and the computed torques: one compiled call.
         tau = self.control.torques(mass, bias, state.q, state.qd, ref.positions, ref.velocities,
                                    ref.accelerations, stop)
@@ -136,7 +139,7 @@ class Simulator:
         limit and positions beyond a limit are pushed back), within the effort limits. Returns the torques (n,)
         [N m]. The servo restarts from the measured state, so that position control resumes without a jump."""
         p = self.params
-        mass, bias = self.physics.dynamics()
+        mass, bias = self._dynamics()
         inertia = np.diag(mass)
         q, qd = state.q, state.qd
         tau = bias - inertia / FREEDRIVE_TAU * qd
@@ -150,6 +153,19 @@ class Simulator:
         self.servo.reset(after.q, after.qd)
         self._servo_active = False
         return tau
+
+    def _dynamics(self) -> tuple[np.ndarray, np.ndarray]:
+        """M(q) and the bias torques as the robot's controller models them: with its believed gravity, which
+        differs from the true one after a set_gravity that does not match the mounting."""
+        mass, bias = self.physics.dynamics()
+        if self.gravity_belief is not None:  # gravity torques are linear in the gravity vector
+            bias = bias + self.physics.gravity_torques(-self.gravity_belief - self.physics.gravity_in_base())
+        return mass, bias
+
+    def set_gravity(self, anti_gravity: np.ndarray) -> None:
+        """The robot's set_gravity (under the simulation lock): `anti_gravity` (3,) [m/s^2] in the base frame, the
+        acceleration away from the earth as the robot takes it; it replaces the gravity of the controller's model."""
+        self.gravity_belief = np.array(anti_gravity, dtype=float)
 
     def tcp_pose(self) -> tuple[np.ndarray, np.ndarray]:
         """tool0 in the base frame: position (3,) [m], quaternion (x, y, z, w)."""

@@ -36,6 +36,7 @@ from ur_sim_driver.controllers.force_torque_sensor_broadcaster import ForceTorqu
 from ur_sim_driver.controllers.forward_command import ForwardCommandController
 from ur_sim_driver.controllers.freedrive_mode import FreedriveModeController
 from ur_sim_driver.controllers.friction_model import FrictionModelController
+from ur_sim_driver.controllers.gravity_update import GravityUpdateController
 from ur_sim_driver.controllers.io_and_status import IoAndStatusController
 from ur_sim_driver.controllers.joint_command import HoldPosition, JointCommandController, JointCommander
 from ur_sim_driver.controllers.joint_state_broadcaster import JointStateBroadcaster
@@ -143,7 +144,7 @@ class UrSimNode(Node):
         self._tool_contact = ToolContactController()
         self.components: list[Component] = [
             JointStateBroadcaster(), SpeedScalingStateBroadcaster(), TcpPoseBroadcaster(),
-            IoAndStatusController(), UrConfigurationController(), FrictionModelController(),
+            IoAndStatusController(), UrConfigurationController(), GravityUpdateController(), FrictionModelController(),
             *((DashboardClient(),) if self.cfg.launch_dashboard_client else ()), RobotStateHelper(),
             TrajectoryUntilNode(), SimulatedInputs(),
             ForceTorqueSensorBroadcaster(), RobotStatePublisher(), SimulatedDispenser(),
