@@ -2,8 +2,9 @@
 
 Services (controller_manager_msgs), as ros2_control jazzy offers them: ``~/list_controllers``,
 ``~/list_controller_types``, ``~/switch_controller``, ``~/load_controller``, ``~/configure_controller``,
-``~/cleanup_controller``, ``~/unload_controller``, ``~/reload_controller_libraries``, and the hardware's
-(``hardware_services.py``); the topic ``~/activity`` (every lifecycle change of a controller or the hardware).
+``~/cleanup_controller``, ``~/unload_controller``, ``~/reload_controller_libraries`` (``lifecycle_services.py``),
+the hardware's (``hardware_services.py``); the topic ``~/activity`` (every lifecycle change of a controller or the
+hardware).
 
 The loaded controllers are ur_sim's components, in their order; the rules are ``controller_manager.py``'s and
 ``controller_lifecycle.py``'s. A switch is decided and done by the simulation loop between two control cycles
@@ -12,14 +13,9 @@ waits until it is done, and until the trajectory controllers' gateway knows, so 
 meets the new states. ``timeout`` bounds that wait (0: no bound); a request the loop has not taken by then is
 dropped and answered ``ok = False``. ``activate_asap`` changes nothing here: every switch happens at the next cycle.
 
-``load_controller`` reads ``<name>.type`` from this node's parameters (declared for the driver's controllers, as
-its ``ur_controllers.yaml`` does) and loads the ur_sim controller of that name and type: ur_sim has no plugin
-loader, so other names or types are refused, naming what it can load. Unloading destroys the controller's node;
-loading creates it again. The trajectory controllers' action and topic are served by the gateway process: while
-such a controller is not loaded they stay, and refuse as for an inactive controller.
-
 The driver's controller_stopper is here too (:meth:`program_state_changed`): while the robot cannot move, the
-active controllers that command it are deactivated; when it can again, they are activated again.
+active controllers outside its consistent list (``startup.CONSISTENT``) are deactivated; when it can again, they
+are activated again.
 """
 from __future__ import annotations
 
@@ -28,21 +24,11 @@ import time
 from dataclasses import dataclass, field
 
 from controller_manager_msgs.msg import ControllerManagerActivity, ControllerState, NamedLifecycleState
-from controller_manager_msgs.srv import (
-    CleanupController,
-    ConfigureController,
-    ListControllers,
-    ListControllerTypes,
-    LoadController,
-    ReloadControllerLibraries,
-    SwitchController,
-    UnloadController,
-)
+from controller_manager_msgs.srv import ListControllers, ListControllerTypes, SwitchController
 from lifecycle_msgs.msg import State
 from rclpy.callback_groups import MutuallyExclusiveCallbackGroup, ReentrantCallbackGroup
 from rclpy.qos import DurabilityPolicy, QoSProfile, ReliabilityPolicy
 
-from ur_sim_driver.controllers import controller_lifecycle as lifecycle
 from ur_sim_driver.controllers import hardware_component as hwc
 from ur_sim_driver.controllers import startup, ur_hardware
 from ur_sim_driver.controllers.base import Component, Host
@@ -52,10 +38,10 @@ from ur_sim_driver.controllers.controller_manager import (
     INACTIVE,
     ControllerManager,
     ControllerSpec,
-    LogLine,
     SwitchPlan,
 )
 from ur_sim_driver.controllers.hardware_services import HardwareServices
+from ur_sim_driver.controllers.lifecycle_services import LifecycleServices
 from ur_sim_driver.motion import conversions as conv
 
 NAME = 'controller_manager'
@@ -114,15 +100,11 @@ class ControllerManagerNode:
             ControllerManagerActivity, '~/activity',
             QoSProfile(depth=1, reliability=ReliabilityPolicy.RELIABLE, durability=DurabilityPolicy.TRANSIENT_LOCAL))
         queries = MutuallyExclusiveCallbackGroup()
-        for srv_type, name, callback in (
-                (ListControllers, 'list_controllers', self._on_list),
-                (ListControllerTypes, 'list_controller_types', self._on_types),
-                (LoadController, 'load_controller', self._on_load),
-                (ConfigureController, 'configure_controller', self._on_configure),
-                (CleanupController, 'cleanup_controller', self._on_cleanup),
-                (UnloadController, 'unload_controller', self._on_unload),
-                (ReloadControllerLibraries, 'reload_controller_libraries', self._on_reload)):
-            self.node.create_service(srv_type, f'~/{name}', callback, callback_group=queries)
+        self.node.create_service(ListControllers, '~/list_controllers', self._on_list, callback_group=queries)
+        self.node.create_service(ListControllerTypes, '~/list_controller_types', self._on_types,
+                                 callback_group=queries)
+        self.lifecycle_services = LifecycleServices(self.node, queries, host, self.manager, self.components,
+                                                    self._spec, self.log, self.publish_activity)
         self.hardware_services = HardwareServices(self.node, queries, host, self.manager, self.update_rate, self.log,
                                                   self.publish_activity)
         # Reentrant: a switch waits for the loop; list requests must not queue behind it.
@@ -248,73 +230,6 @@ class ControllerManagerNode:
         types = sorted({c.type_name for c in self.components.values()})
         response.types = types
         response.base_classes = [BASE_CLASS] * len(types)
-        return response
-
-    def _on_load(self, request, response: LoadController.Response) -> LoadController.Response:
-        name = request.name
-        key = f'{name}.type'
-        if not self.node.has_parameter(key):
-            self.node.declare_parameter(key, '')
-        type_name = self.node.get_parameter(key).value
-        component = self.components.get(name)
-        if not type_name:
-            self.log([LogLine('error', f"The 'type' param was not defined for '{name}'.")])
-        elif component is None or component.type_name != type_name:
-            known = ', '.join(f"{c.name} ({c.type_name})" for c in self.components.values())
-            self.log([LogLine('error', f"Loader for controller '{name}' (type '{type_name}') not found."),
-                      LogLine('info', f'ur_sim has no plugin loader: it loads its controllers under their own names '
-                                      f'and types: {known}')])
-        else:
-            with self.host.lock:
-                step = lifecycle.load(self.manager, self._spec(component))
-            self.log(step.log)
-            if step.ok:
-                component.configure(self.host)
-                executor = self.node.executor
-                if executor is not None:
-                    executor.add_node(component.node)
-                self.publish_activity()
-            response.ok = step.ok
-        return response
-
-    def _lifecycle(self, operation, name: str) -> bool:
-        with self.host.lock:
-            step = operation(self.manager, name)
-        self.log(step.log)
-        if step.ok:
-            self.publish_activity()
-        return step.ok
-
-    def _on_configure(self, request, response: ConfigureController.Response) -> ConfigureController.Response:
-        response.ok = self._lifecycle(lifecycle.configure, request.name)
-        return response
-
-    def _on_cleanup(self, request, response: CleanupController.Response) -> CleanupController.Response:
-        response.ok = self._lifecycle(lifecycle.cleanup, request.name)
-        return response
-
-    def _on_unload(self, request, response: UnloadController.Response) -> UnloadController.Response:
-        response.ok = self._lifecycle(lifecycle.unload, request.name)
-        component = self.components.get(request.name)
-        if response.ok and component is not None:
-            component.unload()
-        return response
-
-    def _on_reload(self, request, response: ReloadControllerLibraries.Response) -> ReloadControllerLibraries.Response:
-        """ur_sim's controllers are built in: there is nothing to reload. With active controllers and no
-        force_kill this is refused with upstream's words; with force_kill it is refused too, since upstream would
-        deactivate and unload every controller and ur_sim has no libraries to load them from again."""
-        active = self.manager.active_names()
-        if active and not request.force_kill:
-            text = (f'Controller manager: Cannot reload controller libraries because there are still {len(active)} '
-                    'active controllers')
-        elif active:
-            text = ('ur_sim has no controller libraries to reload (its controllers are built in); force_kill would '
-                    f'only deactivate and unload {len(active)} active controllers, so it is refused')
-        else:
-            text = 'ur_sim has no controller libraries to reload: its controllers are built in'
-        self.log([LogLine('error' if active else 'info', text)])
-        response.ok = not active
         return response
 
     def destroy(self) -> None:
