@@ -8,6 +8,9 @@ means that controller whatever its name.
 """
 from __future__ import annotations
 
+from collections.abc import Iterable
+
+from ur_sim_driver.controllers.base import Component
 from ur_sim_driver.controllers.ur_hardware import EFFORT_NOT_SIMULATED, EFFORT_TOO_OLD
 from ur_sim_driver.errors import ConfigError
 from ur_sim_driver.robot.sim_config import SimConfig
@@ -52,3 +55,21 @@ def initial_joint_controller(cfg: SimConfig) -> str | None:
 CONSISTENT = ('io_and_status_controller', 'force_torque_sensor_broadcaster', 'joint_state_broadcaster',
               'speed_scaling_state_broadcaster', 'tcp_pose_broadcaster', 'ur_configuration_controller',
               'gravity_update_controller')
+
+
+def set_start_states(cfg: SimConfig, initial: str | None, components: Iterable[Component]) -> str | None:
+    """Set each component's ``initially_active`` as the launch file's spawners leave it: the joint controllers
+    inactive but `initial`; with a hardware component that does not start active, no controller at all (the
+    spawner's one switch is refused: state interfaces unavailable, or commands the component cannot take). Returns
+    the warning to log in that case, else None."""
+    joint = joint_controllers(cfg)
+    hardware = cfg.hardware_components_initial_state
+    for component in components:
+        if component.name in joint:
+            component.initially_active = component.name == initial
+        if hardware != 'active' and component.is_controller:
+            component.initially_active = False
+    if hardware == 'active':
+        return None
+    return (f"hardware component '{cfg.ur_type}' starts {hardware} (hardware_components_initial_state): no "
+            'controller is activated; activate it with set_hardware_component_state, then switch the controllers on')

@@ -151,22 +151,11 @@ class UrSimNode(Node):
             *self._trajectory.values(), ForwardCommandController('position'), ForwardCommandController('velocity'),
             ForwardCommandController('effort'),
             self._passthrough, FreedriveModeController(), self._tool_contact, AppliedWrenches()]
-        joint_controllers = startup.joint_controllers(self.cfg)
-        for component in self.components:
-            if component.name in joint_controllers:
-                component.initially_active = component.name == initial
-        hardware_state = self.cfg.hardware_components_initial_state
-        if hardware_state != 'active':
-            # The driver's spawner activates its controllers in one switch, which a hardware component that is not
-            # active refuses (state interfaces unavailable, or commands it cannot take): none starts active.
-            for component in self.components:
-                if component.is_controller:
-                    component.initially_active = False
-            self.get_logger().warning(f"hardware component '{self.cfg.ur_type}' starts {hardware_state} "
-                                      '(hardware_components_initial_state): no controller is activated; activate it '
-                                      'with set_hardware_component_state, then switch the controllers on')
-            if hardware_state == 'unconfigured':
-                self.robot.stop()  # no driver to connect to: the External Control program does not run
+        warning = startup.set_start_states(self.cfg, initial, self.components)
+        if warning is not None:
+            self.get_logger().warning(warning)
+        if self.cfg.hardware_components_initial_state == 'unconfigured':
+            self.robot.stop()  # no driver to connect to: the External Control program does not run
         for component in self.components:
             component.configure(self.host)
             if component.initially_active:
