@@ -91,6 +91,14 @@ class SwitchPlan:
     log: tuple[LogLine, ...]
 
 
+def _refused(log: list[LogLine], action: str, name: str, why: str, strict: bool) -> bool:
+    """Log that `name` cannot be (de)activated (`action`) and why; True when the request aborts (STRICT)."""
+    log += [LogLine('warn', why), LogLine('warn', f"Could not {action} controller with name '{name}'. {_SEE_ABOVE}")]
+    if strict:
+        log.append(LogLine('error', ABORT_STRICT))
+    return strict
+
+
 class ControllerManager:
     """The loaded controllers, their states and the switch rules.
 
@@ -198,19 +206,13 @@ class ControllerManager:
                 text = f"Controller with name '{name}' is already active."
             else:
                 continue
-            log += [LogLine('warn', text), LogLine('warn', f"Could not activate controller with name '{name}'. "
-                                                           f'{_SEE_ABOVE}')]
-            if strict:
-                log.append(LogLine('error', ABORT_STRICT))
+            if _refused(log, 'activate', name, text, strict):
                 return fail(text)
             act.remove(name)
         for name in list(deact):
             if not self.is_active(name):
                 text = f"Controller with name '{name}' can not be deactivated since it is not active."
-                log += [LogLine('warn', text), LogLine('warn', f"Could not deactivate controller with name '{name}'. "
-                                                               f'{_SEE_ABOVE}')]
-                if strict:
-                    log.append(LogLine('error', ABORT_STRICT))
+                if _refused(log, 'deactivate', name, text, strict):
                     return fail(text)
                 deact.remove(name)
         if not act and not deact:
