@@ -69,3 +69,28 @@ def test_plan_playback_and_save(studio, tmp_path):
     path = studio.save(tmp_path / 'job.yaml')
     raw = yaml.safe_load(path.read_text())
     assert np.array_equal(np.array(raw['path']['waypoints']), studio.teach.planned_arrays()[0])
+
+
+def test_a_run_result_stays_shown_while_its_thread_closes_its_client():
+    """The run thread calls on_done, then closes its ROS client: the page loop must not write the progress line over
+    the result meanwhile (a loaded machine's 'Run succeeded' was replaced by 'running bead: 100 %' once)."""
+    import threading
+
+    from ur_glue_planner.studio.ros_link import LiveRobot, RunResult
+
+    live = LiveRobot()
+    s = Studio(config_dir() / 'glue_job.yaml', port=free_port(), live=live)
+    closing = threading.Event()
+    try:
+        with s._lock:
+            s.run_progress = ('bead', 1.0, 0.0)
+        live._run_thread = threading.Thread(target=closing.wait, daemon=True)  # the run thread, closing its client
+        live._run_thread.start()
+        s._on_run_done(RunResult(True, 0, 'all segments succeeded'), None)
+        with s._lock:
+            s._update_run_gui()
+        assert live.running and s._run_info.content == '**Run succeeded**: all segments succeeded'
+    finally:
+        closing.set()
+        s.close()
+        live.close()

@@ -566,7 +566,8 @@ class Studio:
         self._trail_drawn = len(self._trail)
 
     def _update_run_gui(self) -> None:
-        if self.sjob is None or self.live is None or not self.live.running:
+        # A run's thread lives on after its result (it closes its client): the result, once set, stays shown.
+        if self.sjob is None or self.live is None or not self.live.running or self.run_result is not None:
             return
         segment, fraction, error = self.run_progress
         if segment is not None:
