@@ -1,4 +1,4 @@
-"""Closed-form UR IK: round trips on all four types and all eight branches, and the URDF's own FK."""
+"""Closed-form UR IK: round trips on every UR type and all eight branches, and the URDF's own FK."""
 
 from __future__ import annotations
 

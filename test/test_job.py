@@ -55,7 +55,7 @@ def test_job_is_frozen(job):
 
 
 @pytest.mark.parametrize("raw, field, hint", [
-    ({"ur_type": "ur3"}, "ur_type", "ur5, ur5e, ur10, ur10e"),
+    ({"ur_type": "ur6"}, "ur_type", "ur3, ur3e, ur5, ur5e, ur7e, ur8long"),
     ({"tool": "gripper"}, "tool", "dispenser"),
     ({"tcp_speed": 0}, "tcp_speed", "(0, 1]"),
     ({"tcp_speed": "fast"}, "tcp_speed", "(0, 1]"),

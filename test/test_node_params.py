@@ -30,7 +30,8 @@ def test_seed_ur10_preset_names_exist():
 
 
 @pytest.mark.parametrize(('name', 'value', 'expected'), [
-    ('ur_type', 'ur3', "'ur_type' = 'ur3' is invalid; valid choices: ur5, ur5e, ur10, ur10e"),
+    ('ur_type', 'ur6', "'ur_type' = 'ur6' is invalid; valid choices: ur3, ur3e, ur5, ur5e, ur7e, ur8long, ur10, "
+                       'ur10e, ur12e, ur15, ur16e, ur18, ur20, ur30'),
     ('real_time_factor', -1.0, "'real_time_factor' = -1.0 is outside the allowed range [0.0, 100.0]"),
     ('speed_scaling_initial_factor', 1.5, "'speed_scaling_initial_factor' = 1.5 is outside"),
     ('tool', 'gripper', "'tool' = 'gripper' is invalid; valid choices: none, dispenser"),
@@ -90,11 +91,17 @@ def test_real_time_loop_runs_under_sched_fifo_where_permitted(rtf, priority):
         assert policy == os.SCHED_OTHER
 
 
-def test_console_script_exits_nonzero_with_message_on_bad_parameter():
-    proc = subprocess.run([sys.executable, '-m', 'ur_sim_driver.ros.node', '--ros-args', '-p', 'ur_type:=ur3'],
+@pytest.mark.parametrize('args, message', [
+    (['ur_type:=ur6'], "'ur_type' = 'ur6' is invalid"),
+    # ros2_control_node ends when the hardware cannot reach its initial state: the driver refuses the robot model
+    (['ur_type:=ur20', 'simulated_ur_type:=ur5e'], "The connected robot is of type 'UR5' and version 5.12.6-0 but "
+                                                  "the driver was configured for type 'ur20'")])
+def test_console_script_exits_nonzero_with_message_on_bad_parameter(args, message):
+    ros_args = [a for arg in args for a in ('-p', arg)]
+    proc = subprocess.run([sys.executable, '-m', 'ur_sim_driver.ros.node', '--ros-args', *ros_args],
                           capture_output=True, text=True, timeout=60)
     assert proc.returncode == 2
-    assert "'ur_type' = 'ur3' is invalid" in proc.stderr
+    assert message in proc.stderr
 
 
 def test_viewer_without_display_runs_headless(monkeypatch):

@@ -23,6 +23,7 @@ from ur_glue_planner.motion.dispense import DispenseSchedule, run_up_length, sch
 from ur_glue_planner.motion.ik_branch import Branch, choose_branch
 from ur_glue_planner.motion.joint_trajectory import JointPlan, build_joint_plan
 from ur_glue_planner.motion.kinematics import Kinematics
+from ur_glue_planner.motion.reach import reach_refusal
 from ur_glue_planner.motion.seed1 import seed1_bead
 from ur_glue_planner.motion.ur_arm_kinematics import ur_kinematics
 from ur_glue_planner.path.glue_path import GluePath, build_glue_path
@@ -165,6 +166,9 @@ def plan_job(job: GlueJob, q_current: np.ndarray, qd_current: np.ndarray | None 
     kin = ur_kinematics(params, tool)
     axis = tool_axis(tool)
     points, rots = job_waypoints(job, axis)
+    refusal = reach_refusal(points, rots, params, tool)
+    if refusal is not None:
+        raise PlanningError(refusal)
     path = build_glue_path(points, rots, max_deviation=job.path.corner_max_deviation, closed=job.path.closed)
     seed1 = job.method == "seed1"
     bead_path = path

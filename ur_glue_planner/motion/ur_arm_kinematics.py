@@ -118,7 +118,7 @@ def ur_kinematics(robot: URParams | str, tool: ToolDef | str | None = "dispenser
     path IK uses the closed-form UR solution; any other frame a plain :class:`Kinematics`.
 
     Args:
-        robot: The arm's parameters, or its type's name ('ur5', 'ur5e', 'ur10', 'ur10e'), loaded here.
+        robot: The arm's parameters, or its type's name (one of UR_TYPES, e.g. 'ur5e'), loaded here.
         tool: Tool on tool0, or its name ('dispenser' or None/'none').
         frame: Frame to compute; default: the tool tip, or 'tool0' without a tool.
         base_pose: World pose (4, 4) of base_link; identity (robot at the world origin) if None.

@@ -40,6 +40,7 @@ from ur_msgs.srv import SetAnalogOutput, SetIO, SetPayload, SetSpeedSliderFracti
 
 from ur_sim_driver.controllers.base import Component, Cycle, Host
 from ur_sim_driver.controllers.cdr_template import raw_publish
+from ur_sim_driver.description.params import load_ur_params
 from ur_sim_driver.errors import ConfigError
 from ur_sim_driver.robot.io_bank import (
     IoBank,
@@ -50,8 +51,6 @@ from ur_sim_driver.robot.io_bank import (
 from ur_sim_driver.robot.robot_state import POWER_OFF, RobotStatus
 from ur_sim_driver.robot.speed_scaling import SLIDER_MAX, SLIDER_MIN
 
-# Rated payload [kg] per robot type (UR's data sheets).
-PAYLOAD_RATING = {'ur5': 5.0, 'ur5e': 5.0, 'ur10': 10.0, 'ur10e': 12.5}
 TOOL_TEMPERATURE = 32.0  # [deg C] the tool flange's temperature (constant: no thermal model)
 TOOL_SUPPLY = 48.0  # [V] the tool's internal supply while the arm has power
 
@@ -67,7 +66,7 @@ def payload_refusal(ur_type: str, mass: float, cog: np.ndarray, inertia: np.ndar
         inertia: (6,) ixx, iyy, izz, ixy, ixz, iyz [kg m^2]; the principal terms must be >= 0.
         transition_time: [s] >= 0.
     """
-    rating = PAYLOAD_RATING[ur_type]
+    rating = load_ur_params(ur_type).payload  # UR's data sheet
     if not (math.isfinite(mass) and 0.0 <= mass <= rating):
         return f'mass = {mass} kg is outside [0, {rating}] kg (the rated payload of a {ur_type.upper()})'
     for axis, value in zip('xyz', cog):
@@ -243,7 +242,7 @@ class IoAndStatusController(Component):
         inertia = np.array([req.ixx, req.iyy, req.izz, req.ixy, req.ixz, req.iyz])
         transition = req.transition_time.sec + req.transition_time.nanosec * 1e-9
         mass = float(req.mass)
-        reason = payload_refusal(self.host.cfg.ur_type, mass, cog, inertia, transition)
+        reason = payload_refusal(self.host.cfg.simulated_ur_type, mass, cog, inertia, transition)
         res.success = False
         if reason is not None:
             self.node.get_logger().error(f'refused: {reason}')

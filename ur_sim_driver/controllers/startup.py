@@ -11,7 +11,7 @@ from __future__ import annotations
 from collections.abc import Iterable
 
 from ur_sim_driver.controllers.base import Component
-from ur_sim_driver.controllers.ur_hardware import EFFORT_NOT_SIMULATED, EFFORT_TOO_OLD
+from ur_sim_driver.controllers.ur_hardware import EFFORT_NOT_SIMULATED, EFFORT_TOO_OLD, robot_model_refusal
 from ur_sim_driver.errors import ConfigError
 from ur_sim_driver.robot.sim_config import SimConfig
 from ur_sim_driver.robot.software import TORQUE_CONTROL, supports
@@ -48,6 +48,30 @@ def initial_joint_controller(cfg: SimConfig) -> str | None:
         raise ConfigError(f"parameter 'initial_joint_controller' = {name!r} cannot be activated: {why}; valid "
                           f"choices: {', '.join(c for c in choices if c != EFFORT)}")
     return name
+
+
+def model_refusal(cfg: SimConfig) -> str | None:
+    """The hardware component's refusal to configure: the robot is not the configured type (with
+    ``verify_robot_model``), or None."""
+    if not cfg.verify_robot_model:
+        return None
+    return robot_model_refusal(cfg.ur_type, cfg.simulated_ur_type, cfg.software_version)
+
+
+def check_start(cfg: SimConfig) -> None:
+    """Raise as ros2_control_node ends at start when its hardware component cannot reach its initial state
+    (``hardware_components_initial_state.shutdown_on_initial_state_failure`` is true by default): configuring it
+    fails on a robot model mismatch. A component left unconfigured starts, and refuses later.
+
+    Raises:
+        ConfigError: the driver's message, then the controller manager's.
+    """
+    state = cfg.hardware_components_initial_state
+    reason = model_refusal(cfg) if state != 'unconfigured' else None
+    if reason is not None:
+        raise ConfigError(f'{reason} Failed to set the initial state of the component : {cfg.ur_type} to {state} '
+                          f"(parameters 'ur_type' = {cfg.ur_type!r}, 'simulated_ur_type' = {cfg.simulated_ur_type!r}; "
+                          "'verify_robot_model' = false runs them anyway)")
 
 
 # The controller_stopper's "consistent_controllers" (the launch file's list): these keep running while the robot

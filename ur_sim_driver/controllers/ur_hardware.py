@@ -13,6 +13,7 @@ from __future__ import annotations
 
 from collections.abc import Iterable
 
+from ur_sim_driver.description.params import load_ur_params
 from ur_sim_driver.robot.software import TORQUE_CONTROL, SoftwareVersion, supports
 
 POSITION, VELOCITY, EFFORT = 'position', 'velocity', 'effort'
@@ -129,3 +130,17 @@ def prefixed_joints(joints: Iterable[str], tf_prefix: str) -> tuple[str, ...]:
 def joint_interfaces(joints: Iterable[str], *kinds: str) -> tuple[str, ...]:
     """``<joint>/<kind>`` for every joint and kind, joint-major, as ros2_control's controllers list them."""
     return tuple(f'{j}/{k}' for j in joints for k in kinds)
+
+
+def robot_model_refusal(ur_type: str, robot_type: str, version: SoftwareVersion) -> str | None:
+    """The hardware's refusal to configure for `ur_type` when the robot is a `robot_type`, or None.
+
+    As ``on_configure`` with ``verify_robot_model``: the robot reports its model and series (a ur7e reports as a
+    UR5 of the e-Series, so a driver configured for a ur5e accepts it), and the two must agree.
+    """
+    expected, robot = load_ur_params(ur_type), load_ur_params(robot_type)
+    if (expected.model, expected.series) == (robot.model, robot.series):
+        return None
+    return (f"The connected robot is of type '{robot.model}' and version {version} but the driver was configured for "
+            f"type '{ur_type}'. Please check the 'ur_type' parameter and make sure it matches your actual robot. "
+            'This can lead to critical inaccuracies of tcp positions.')

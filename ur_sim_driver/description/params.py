@@ -23,7 +23,10 @@ from scipy.spatial.transform import Rotation
 from ur_sim_driver import paths
 from ur_sim_driver.errors import ConfigError
 
-UR_TYPES: tuple[str, ...] = ('ur5', 'ur5e', 'ur10', 'ur10e')
+# The types the UR driver supports (jazzy a16a268: hardware_interface.cpp robotTypeFromString), one file each.
+UR_TYPES: tuple[str, ...] = ('ur3', 'ur3e', 'ur5', 'ur5e', 'ur7e', 'ur8long', 'ur10', 'ur10e', 'ur12e', 'ur15',
+                             'ur16e', 'ur18', 'ur20', 'ur30')
+SERIES: tuple[str, ...] = ('cb3', 'e', 'ur')  # CB3, e-Series, UR Series
 JOINT_NAMES: tuple[str, ...] = (
     'shoulder_pan_joint', 'shoulder_lift_joint', 'elbow_joint',
     'wrist_1_joint', 'wrist_2_joint', 'wrist_3_joint',
@@ -118,7 +121,11 @@ class URParams:
 
     Attributes:
         name: UR type, e.g. ``'ur5e'``.
-        series: ``'cb3'`` or ``'e'``.
+        model: the robot type its controller reports, e.g. ``'UR5'`` for a ur5e or a ur7e.
+        series: ``'cb3'``, ``'e'`` (e-Series) or ``'ur'`` (UR Series).
+        payload: rated payload [kg]; reach: [m] (data sheet).
+        software_minimum, software_default: controller software (major, minor, bugfix): the first release
+            that runs the type, and the one ur_sim runs unless told otherwise.
         dh: DH lengths [m].
         masses: link masses (6,) [kg].
         coms: centres of mass (6, 3) [m], each in its link frame.
@@ -139,7 +146,12 @@ class URParams:
     """
 
     name: str
+    model: str
     series: str
+    payload: float
+    reach: float
+    software_minimum: tuple[int, int, int]
+    software_default: tuple[int, int, int]
     dh: DH
     masses: np.ndarray
     coms: np.ndarray
@@ -188,6 +200,13 @@ def _get(d: dict, key: str, where: str) -> Any:
     return d[key]
 
 
+def _release(text: Any, what: str) -> tuple[int, int, int]:
+    parts = str(text).split('.')
+    if len(parts) != 3 or not all(p.isdigit() for p in parts):
+        raise ConfigError(f'{what}: expected a release major.minor.bugfix, got {text!r}')
+    return int(parts[0]), int(parts[1]), int(parts[2])
+
+
 def load_ur_params(ur_type: str) -> URParams:
     """Read the parameters of ``ur_type`` (one of ``UR_TYPES``, case-insensitive); cached.
 
@@ -215,10 +234,19 @@ def _load(key: str) -> URParams:
     pos = _frozen(_get(lim, 'position_deg', w), (6,), f'{w}: limits.position_deg', deg)
     radii = _get(sim, 'collision_radius', w)
     base, off, dh = _get(raw, 'base', w), _get(raw, 'offsets', w), _get(raw, 'dh', w)
+    software = _get(raw, 'software', w)
+    series = str(_get(raw, 'series', w))
+    if series not in SERIES:
+        raise ConfigError(f'{w}: series {series!r} is not one of {", ".join(SERIES)}')
     try:
         params = URParams(
             name=key,
-            series=str(_get(raw, 'series', w)),
+            model=str(_get(raw, 'model', w)),
+            series=series,
+            payload=float(_get(raw, 'payload', w)),
+            reach=float(_get(raw, 'reach', w)),
+            software_minimum=_release(_get(software, 'minimum', f'{w}: software'), f'{w}: software.minimum'),
+            software_default=_release(_get(software, 'default', f'{w}: software'), f'{w}: software.default'),
             dh=DH(**{k: float(_get(dh, k, f'{w}: dh')) for k in ('d1', 'a2', 'a3', 'd4', 'd5', 'd6')}),
             masses=_frozen([_get(p, 'mass', w) for p in per_link], (6,), f'{w}: mass'),
             coms=_frozen([_get(p, 'com', w) for p in per_link], (6, 3), f'{w}: com'),
@@ -244,8 +272,12 @@ def _load(key: str) -> URParams:
         raise ConfigError(f'{w}: malformed number: {exc}') from exc
     positive = {'mass': params.masses, 'limits.position_deg': params.q_max, 'limits.velocity_deg_s': params.v_max,
                 'limits.effort': params.effort_max, 'limits.acceleration': params.a_max,
-                'control_rate': params.control_rate, 'collision_radius': list(params.collision_radius.values())}
+                'control_rate': params.control_rate, 'payload': params.payload, 'reach': params.reach,
+                'collision_radius': list(params.collision_radius.values())}
     for what, values in positive.items():
         if np.any(np.asarray(values) <= 0.0):
             raise ConfigError(f'{w}: {what} must be > 0, got {values}')
+    if params.software_default < params.software_minimum:
+        raise ConfigError(f'{w}: software.default {params.software_default} is older than software.minimum '
+                          f'{params.software_minimum}')
     return params

@@ -17,6 +17,7 @@ import zipfile
 from dataclasses import dataclass
 from pathlib import Path
 
+from ur_sim_driver.description.params import load_ur_params
 from ur_sim_driver.robot.robot_state import (
     PLAYING,
     PROGRAM_DIR,
@@ -57,7 +58,7 @@ class DashboardServer:
                  files: Path | None = None) -> None:
         self.robot = robot
         self.version = version or default_version(ur_type)
-        self.model = 'UR' + ur_type[2:].removesuffix('e').upper()  # e-series types answer without the 'e'
+        self.model = load_ur_params(ur_type).model  # as the controller reports its type: a ur7e is a 'UR5'
         self.files = files
         self.installation = INSTALLATIONS[0]
         self.log: list[str] = []  # messages added with addToLog

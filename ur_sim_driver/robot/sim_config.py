@@ -6,12 +6,12 @@ from collections.abc import Mapping
 from dataclasses import dataclass
 from typing import Any
 
+from ur_sim_driver.description.params import UR_TYPES
 from ur_sim_driver.errors import ConfigError
 from ur_sim_driver.robot.dispenser import DispenserParams, dispenser_params
 from ur_sim_driver.robot.safety import DEFAULT_CONTACT_FORCE, DEFAULT_FORCE_WINDOW
 from ur_sim_driver.robot.software import SoftwareVersion, default_version, parse_version
 
-UR_TYPES = ('ur5', 'ur5e', 'ur10', 'ur10e')
 TOOLS = ('none', 'dispenser')
 SCENES = ('empty', 'windshield')
 DEFAULT_JOINTS = ('shoulder_pan_joint', 'shoulder_lift_joint', 'elbow_joint',
@@ -30,7 +30,11 @@ class JointConstraint:
 class SimConfig:
     """Everything `ur_sim` needs to start. Defaults are the UR driver's."""
 
-    ur_type: str = 'ur5e'
+    ur_type: str = 'ur5e'  # the type the driver is configured for: the description, the hardware component's name
+    # The robot ur_sim simulates, as URSim's model is chosen ('': the same as ur_type). Physics, dashboard, payload
+    # rating and software version are the robot's; the driver checks the two agree (verify_robot_model).
+    simulated_ur_type: str = ''
+    verify_robot_model: bool = True  # ur.urdf.xacro's default
     tf_prefix: str = ''
     namespace: str = ''
     joints: tuple[str, ...] = DEFAULT_JOINTS
@@ -70,8 +74,10 @@ class SimConfig:
     hardware_components_initial_state: str = 'active'
 
     def __post_init__(self) -> None:
+        if not self.simulated_ur_type:
+            object.__setattr__(self, 'simulated_ur_type', self.ur_type)
         if self.software_version is None:  # resolved once: every reader sees the version the robot runs
-            object.__setattr__(self, 'software_version', default_version(self.ur_type))
+            object.__setattr__(self, 'software_version', default_version(self.simulated_ur_type))
 
     def prefixed(self, name: str) -> str:
         """`name` under the configured namespace, e.g. '/ur10/joint_states'."""
@@ -144,9 +150,13 @@ def sim_config_from_params(params: Mapping[str, Any]) -> SimConfig:
         raise ConfigError(f"parameter 'update_rate' = {update_rate} is outside the allowed range: 0 (type default) "
                           'or [10, 5000] Hz')
     ur_type = _choice('ur_type', get('ur_type', d.ur_type), UR_TYPES)
+    robot = get('simulated_ur_type', '') or ur_type
+    robot = _choice('simulated_ur_type', robot, UR_TYPES)
     return SimConfig(
         ur_type=ur_type,
-        software_version=parse_version(str(get('software_version', '')), ur_type),
+        simulated_ur_type=robot,
+        verify_robot_model=bool(get('verify_robot_model', d.verify_robot_model)),
+        software_version=parse_version(str(get('software_version', '')), robot),
         tf_prefix=str(get('tf_prefix', d.tf_prefix)),
         namespace=str(get('namespace', d.namespace)),
         joints=joints,

@@ -61,7 +61,7 @@ class Simulator:
     """
 
     def __init__(self, cfg: SimConfig) -> None:
-        self.params = load_ur_params(cfg.ur_type)
+        self.params = load_ur_params(cfg.simulated_ur_type)  # the robot's own, whatever the driver is told
         tool = get_tool(cfg.tool)
         self.control_rate = cfg.update_rate or self.params.control_rate
         self.control_dt = 1.0 / self.control_rate

@@ -11,6 +11,7 @@ from __future__ import annotations
 import re
 from typing import NamedTuple
 
+from ur_sim_driver.description.params import load_ur_params
 from ur_sim_driver.errors import ConfigError
 
 
@@ -38,15 +39,14 @@ class SoftwareVersion(NamedTuple):
 
 # Widely used releases: 5.12.6 (the URSim e-series image many driver users test with), 3.15.8 (a late CB3
 # release, upstream's CB3 dashboard test entry). UR's build numbers are not published with them: build 0 marks
-# the version as a simulated one.
+# the version as a simulated one. Each type's default and first release are facts of its file in config/ur_types.
 E_SERIES_VERSION = SoftwareVersion(5, 12, 6, 0)
 CB3_VERSION = SoftwareVersion(3, 15, 8, 0)
-CB3_TYPES = ('ur3', 'ur5', 'ur10')
 
 
 def default_version(ur_type: str) -> SoftwareVersion:
     """The version a robot of `ur_type` runs unless told otherwise."""
-    return CB3_VERSION if ur_type in CB3_TYPES else E_SERIES_VERSION
+    return SoftwareVersion(*load_ur_params(ur_type).software_default)
 
 
 def parse_version(text: str, ur_type: str) -> SoftwareVersion:
@@ -57,9 +57,12 @@ def parse_version(text: str, ur_type: str) -> SoftwareVersion:
     """
     if not text:
         return default_version(ur_type)
+    params = load_ur_params(ur_type)
     match = re.fullmatch(r'(\d+)\.(\d+)\.(\d+)(?:\.(\d+))?', text.strip())
-    cb3 = ur_type in CB3_TYPES
-    runs = '3.x (CB3 software)' if cb3 else '5.x (PolyScope 5)'
+    cb3 = params.series == 'cb3'
+    first = SoftwareVersion(*params.software_minimum)
+    runs = (f'3.x (CB3 software) from {first.major}.{first.minor}' if cb3
+            else f'5.x (PolyScope 5) from {first.major}.{first.minor}.{first.bugfix}')
     if match is None:
         raise ConfigError(f"parameter 'software_version' = {text!r} is not a version: major.minor.bugfix[.build], "
                           f"e.g. {default_version(ur_type).dotted()}")
@@ -67,7 +70,7 @@ def parse_version(text: str, ur_type: str) -> SoftwareVersion:
     if version.major >= 10:
         raise ConfigError(f"parameter 'software_version' = {text!r} is PolyScope X, which ur_sim does not simulate "
                           f'yet; {ur_type} runs {runs}')
-    if (version.major == 3) != cb3 or version.major not in (3, 5):
+    if (version.major == 3) != cb3 or version.major not in (3, 5) or version[:3] < first[:3]:
         raise ConfigError(f"parameter 'software_version' = {text!r} does not run on a {ur_type}: it runs {runs}")
     return version
 

@@ -83,7 +83,8 @@ class DashboardClient(Component):
         self._connection = threading.Lock()
 
     def on_configure(self, host: Host, node: Node) -> None:
-        self.server = DashboardServer(host.robot, host.cfg.ur_type, host.cfg.software_version, host.robot_files)
+        cfg = host.cfg
+        self.server = DashboardServer(host.robot, cfg.simulated_ur_type, cfg.software_version, host.robot_files)
         # The driver's dashboard client node parameter (set as `-p dashboard_client:autoconnect:=false`): without
         # it the client starts disconnected and waits for ~/connect.
         self.connected = bool(node.declare_parameter('autoconnect', True).value)

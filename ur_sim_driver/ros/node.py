@@ -111,6 +111,7 @@ class UrSimNode(Node):
         p = self.cfg.prefixed
         ctrl = self.cfg.controller_name
         initial = startup.initial_joint_controller(self.cfg)  # checked before the gateway process starts
+        startup.check_start(self.cfg)
         self._pub_clock = self.create_publisher(Clock, '/clock', 10)
 
         params = self.sim.params

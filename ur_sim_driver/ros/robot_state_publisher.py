@@ -19,9 +19,9 @@ from tf2_msgs.msg import TFMessage
 
 from ur_sim_driver.controllers.base import Component, Cycle, Host
 from ur_sim_driver.controllers.cdr_template import CdrTemplate
-from ur_sim_driver.description.params import matrix_to_quat
+from ur_sim_driver.description.params import load_ur_params, matrix_to_quat
 from ur_sim_driver.description.tool import get_tool
-from ur_sim_driver.description.urdf import JointSpec, kinematic_tree
+from ur_sim_driver.description.urdf import JointSpec, build_urdf, kinematic_tree
 from ur_sim_driver.motion import conversions as conv
 
 _Z = np.array([0.0, 0.0, 1.0])
@@ -60,7 +60,10 @@ class RobotStatePublisher(Component):
         # period of slack keeps the publishing on the cycle nearest each multiple.
         self._slack = 0.5 * sim.control_dt
 
-        tree = kinematic_tree(sim.params, cfg.tf_prefix, get_tool(cfg.tool))
+        # The description of the type the driver is configured for: the robot's own only when the two agree (with
+        # verify_robot_model off a mismatch runs, and /tf is then as wrong as the driver's would be).
+        described = load_ur_params(cfg.ur_type)
+        tree = kinematic_tree(described, cfg.tf_prefix, get_tool(cfg.tool))
         stamp = conv.sec_to_time(sim.time)
         static = []
         for joint in tree:
@@ -79,7 +82,8 @@ class RobotStatePublisher(Component):
             floats=tuple(f'transforms[{k}].transform.rotation.{a}' for k in range(len(moving)) for a in 'xyzw'),
             publisher=self._pub_tf)
 
-        self._pub_description.publish(String(data=sim.urdf))
+        urdf = sim.urdf if described is sim.params else build_urdf(described, cfg.tf_prefix, get_tool(cfg.tool))
+        self._pub_description.publish(String(data=urdf))
         self._pub_static.publish(TFMessage(transforms=static))
 
     def update(self, cycle: Cycle) -> None:
