@@ -122,9 +122,14 @@ def test_auto_bead_around_the_glass_plans_within_limits():
 
 
 def test_planning_errors_name_the_stage():
-    job = parse_job({"path": {"waypoints": [[1.5, 0.0, 0.3], [1.6, 0.0, 0.3]], "closed": False}})
-    with pytest.raises(PlanningError, match="out of reach"):
-        plan_job(job, np.array(job.home))
+    # Beyond the arm's envelope: refused before IK (test_reach.py). Within it (the flange 0.94 m from the shoulder of
+    # a UR5 whose flange never gets farther than 0.95 m) but not at this orientation: the IK stage says so.
+    far = parse_job({"path": {"waypoints": [[1.5, 0.0, 0.3], [1.6, 0.0, 0.3]], "closed": False}})
+    with pytest.raises(PlanningError, match="'ur5' cannot reach the bead"):
+        plan_job(far, np.array(far.home))
+    edge = parse_job({"path": {"waypoints": [[0.04, 1.038, -0.08], [0.06, 1.038, -0.08]], "closed": False}})
+    with pytest.raises(PlanningError, match="no IK solution for the bead start .* out of reach"):
+        plan_job(edge, np.array(edge.home))
 
 
 def test_speed_within_weights_by_length():

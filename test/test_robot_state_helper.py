@@ -18,8 +18,10 @@ def robot():
     with running_sim(start_powered_off=True) as h:
         h.set_mode = ActionClient(h.client, SetMode, '/ur_robot_state_helper/set_mode')
         wait_still(h.set_mode.server_is_ready, what='the set_mode action server')
+        # Not destroyed here: the harness's executor still spins the client node, and an action client destroyed
+        # under it kills the spin thread (RCLError: action client pointer is invalid, seen in a CI run); it goes
+        # with its node once the harness has stopped spinning.
         yield h
-        h.set_mode.destroy()
 
 
 def _run(h, target, stop_program=False, play_program=False, feedback=None):
