@@ -8,8 +8,8 @@ of the others for some start points (the seed's first waypoint). So the planner 
 branches at the bead start (IK from the reference pose, then for a UR arm its eight closed-form
 solutions, for other kinematics fixed pseudo-random guesses), follows each one along the bead on
 a coarse grid (a UR arm: its closed-form branch, all grid points at once), and keeps the branch
-that stays continuous with the lowest peak joint-speed demand (furthest from singularities);
-near-ties go to the branch nearest to the reference pose.
+that stays continuous, clear of itself and the floor (``clearance.py``), with the lowest peak joint-speed demand
+(furthest from singularities); near-ties go to the branch nearest to the reference pose.
 """
 
 from __future__ import annotations
@@ -21,6 +21,7 @@ import numpy as np
 
 from ur_glue_planner.errors import PlanningError
 from ur_glue_planner.motion.analytic_ik import follow_branch, nearest_branch
+from ur_glue_planner.motion.clearance import Clearance
 from ur_glue_planner.motion.kinematics import Kinematics
 from ur_glue_planner.motion.ur_arm_kinematics import UrKinematics
 from ur_glue_planner.path.glue_path import GluePath
@@ -95,8 +96,15 @@ def _grid(path: GluePath, spacing: float) -> tuple[np.ndarray, np.ndarray]:
     return s, targets
 
 
+def _touch_reason(clearance: Clearance | None, q: np.ndarray, s: np.ndarray) -> str:
+    """Why the arm cannot lay the bead in configurations q (n, n_joints) at arc lengths s (n,), or ''."""
+    touch = clearance.first_touch(q) if clearance is not None else None
+    return '' if touch is None else f"{touch.describe()} at s = {s[touch.index]:.3f} m"
+
+
 def _follow_closed_form(kin: UrKinematics, s: np.ndarray, branches: np.ndarray, q_start: np.ndarray,
-                        speed: float, max_jump: float) -> tuple[bool, float, str] | None:
+                        speed: float, max_jump: float,
+                        clearance: Clearance | None = None) -> tuple[bool, float, str] | None:
     """:func:`follow` on the grid's closed-form branches made continuous (n, 8, n_joints)
     (:func:`~ur_glue_planner.motion.analytic_ik.follow_branch`); None if q_start is on none of them."""
     branch, distance = nearest_branch(branches[0], q_start)
@@ -115,16 +123,20 @@ def _follow_closed_form(kin: UrKinematics, s: np.ndarray, branches: np.ndarray, 
     if k_jump < len(s):
         j = int(np.argmax(step[k_jump - 1]))
         return False, math.inf, f"{kin.joint_names[j]} jumps {step[k_jump - 1, j]:.2f} rad at s = {s[k_jump]:.3f} m"
+    touch = _touch_reason(clearance, q, s)
+    if touch:
+        return False, math.inf, touch
     peak = float(np.max(step / np.diff(s)[:, None] * speed / kin.v_max))
     return True, peak, ""
 
 
 def follow(path: GluePath, kin: Kinematics, q_start: np.ndarray, speed: float, spacing: float = _SPACING,
-           max_jump: float = _MAX_JUMP) -> tuple[bool, float, str]:
+           max_jump: float = _MAX_JUMP, clearance: Clearance | None = None) -> tuple[bool, float, str]:
     """Follow the bead from ``q_start`` on a grid of ``spacing`` [m].
 
     A UR arm follows its closed-form branch through q_start; other kinematics run warm-started
-    IK from grid point to grid point.
+    IK from grid point to grid point. With ``clearance``, a grid point where the arm touches
+    itself or the floor makes the branch infeasible.
 
     Returns:
         (feasible, peak joint-speed usage at ``speed`` [m/s], reason if not feasible). A joint
@@ -134,10 +146,10 @@ def follow(path: GluePath, kin: Kinematics, q_start: np.ndarray, speed: float, s
     if isinstance(kin, UrKinematics):
         solutions = kin.analytic.solve(targets)
         out = _follow_closed_form(kin, s, follow_branch(solutions, solutions[0]), np.asarray(q_start, dtype=float),
-                                  speed, max_jump)
+                                  speed, max_jump, clearance)
         if out is not None:
             return out
-    q_prev, peak = np.asarray(q_start, dtype=float), 0.0
+    q_prev, peak, qs = np.asarray(q_start, dtype=float), 0.0, []
     for k in range(len(s)):
         res = kin.ik(targets[k], q_prev, max_iterations=50)
         if not res.converged:
@@ -149,11 +161,14 @@ def follow(path: GluePath, kin: Kinematics, q_start: np.ndarray, speed: float, s
         if k > 0:
             peak = max(peak, float(np.max(step / (s[k] - s[k - 1]) * speed / kin.v_max)))
         q_prev = res.q
-    return True, peak, ""
+        qs.append(res.q)
+    touch = _touch_reason(clearance, np.array(qs), s)
+    return (False, math.inf, touch) if touch else (True, peak, "")
 
 
 def choose_branch(path: GluePath, kin: Kinematics, reference: np.ndarray, speed: float, *,
-                  n_random: int = 24, tie: float = 0.05) -> tuple[Branch, tuple[Branch, ...]]:
+                  n_random: int = 24, tie: float = 0.05,
+                  clearance: Clearance | None = None) -> tuple[Branch, tuple[Branch, ...]]:
     """The branch to lay the bead in, and every branch examined (chosen one included).
 
     Args:
@@ -163,6 +178,7 @@ def choose_branch(path: GluePath, kin: Kinematics, reference: np.ndarray, speed:
         speed: Bead speed [m/s], to express the joint-speed demand as a fraction of v_max.
         n_random: Extra pseudo-random IK guesses (fixed seed: the choice is repeatable).
         tie: Peak usages within this fraction count as equal; the nearer branch wins.
+        clearance: The arm's collision shapes: a branch in which it touches itself or the floor is infeasible.
 
     Raises:
         PlanningError: No branch reaches the bead start, or none follows the whole bead.
@@ -178,10 +194,10 @@ def choose_branch(path: GluePath, kin: Kinematics, reference: np.ndarray, speed:
     if isinstance(kin, UrKinematics):  # all branches from one closed-form solve of the grid
         solutions = kin.analytic.solve(targets)
         branches = follow_branch(solutions, solutions[0])  # all eight, unwrapped once
-        follows = {i: _follow_closed_form(kin, s, branches, q, speed, _MAX_JUMP) for i, q in enumerate(qs)}
+        follows = {i: _follow_closed_form(kin, s, branches, q, speed, _MAX_JUMP, clearance) for i, q in enumerate(qs)}
     branches = []
     for i, q in enumerate(qs):
-        ok, peak, why = follows.get(i) or follow(path, kin, q, speed, _SPACING, _MAX_JUMP)
+        ok, peak, why = follows.get(i) or follow(path, kin, q, speed, _SPACING, _MAX_JUMP, clearance)
         branches.append(Branch(q, ok, peak, float(np.linalg.norm(q - reference)), why))
     good = [b for b in branches if b.feasible]
     if not good:

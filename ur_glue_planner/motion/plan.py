@@ -19,6 +19,7 @@ import numpy as np
 from ur_glue_planner.errors import PlanningError
 from ur_glue_planner.job import GlueJob
 from ur_glue_planner.motion.approach import JointSegment, joint_move, tool_axis_move
+from ur_glue_planner.motion.clearance import Clearance
 from ur_glue_planner.motion.dispense import DispenseSchedule, run_up_length, schedule_dispenser
 from ur_glue_planner.motion.ik_branch import Branch, choose_branch
 from ur_glue_planner.motion.joint_trajectory import JointPlan, build_joint_plan
@@ -169,6 +170,7 @@ def plan_job(job: GlueJob, q_current: np.ndarray, qd_current: np.ndarray | None 
     refusal = reach_refusal(points, rots, params, tool)
     if refusal is not None:
         raise PlanningError(refusal)
+    clearance = Clearance(params, tool)
     path = build_glue_path(points, rots, max_deviation=job.path.corner_max_deviation, closed=job.path.closed)
     seed1 = job.method == "seed1"
     bead_path = path
@@ -185,7 +187,7 @@ def plan_job(job: GlueJob, q_current: np.ndarray, qd_current: np.ndarray | None 
     if job.ik_seed is not None:
         q_guess = np.array(job.ik_seed)
     else:
-        branch, branches = choose_branch(motion_path, kin, np.array(job.home), job.tcp_speed)
+        branch, branches = choose_branch(motion_path, kin, np.array(job.home), job.tcp_speed, clearance=clearance)
         q_guess = branch.q
     if seed1:
         bead, corners = seed1_bead(kin, points, rots, q_guess, job.tcp_speed, job.sample_time, job.path.closed)
@@ -216,6 +218,11 @@ def plan_job(job: GlueJob, q_current: np.ndarray, qd_current: np.ndarray | None 
     segments = [s for s in (approach, descent, retreat) if s is not None]
     for seg in segments:
         _check_limits(seg, kin, params.a_max)
+    for name, times, q in [(s.name, s.times, s.q) for s in segments] + [("bead", bead.times, bead.q)]:
+        touch = clearance.first_touch(q)
+        if touch is not None:
+            raise PlanningError(f"{name}: {touch.describe()} at t = {times[touch.index]:.2f} s (q = "
+                                f"{np.round(q[touch.index], 3).tolist()} rad); the arm would stop on contact")
 
     timing = bead.timing
     cruise = (bead.times >= timing.piece_t[1]) & (bead.times <= timing.piece_t[-2])
