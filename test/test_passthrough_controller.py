@@ -85,7 +85,9 @@ def test_passthrough_trajectory(rig):
 def test_quintic_trajectory(rig):
     h, cm, client = rig
     activate(cm)
-    handle = send(h, client, goal(h, velocities=True, accelerations=True, position_tol=0.01, velocity_tol=0.01,
+    # As the driver's test: a velocity tolerance of 0 (the message's default) against the last point's zero
+    # velocities: the robot must report exactly 0.0 when it reports the end (encoder counts, robot/encoders.py).
+    handle = send(h, client, goal(h, velocities=True, accelerations=True, position_tol=0.01, velocity_tol=0.0,
                                goal_time=1.0))
     assert handle.accepted
     status, code, text = result(h, handle)

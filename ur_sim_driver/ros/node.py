@@ -12,6 +12,7 @@ publishes on /clock.
 """
 from __future__ import annotations
 
+import dataclasses
 import gc
 import os
 import signal
@@ -52,6 +53,7 @@ from ur_sim_driver.gateway.memory import use_mmap_for_large_blocks
 from ur_sim_driver.motion import conversions as conv
 from ur_sim_driver.motion.jtc import TrajectoryController
 from ur_sim_driver.motion.tolerances import default_tolerances
+from ur_sim_driver.robot.encoders import reported_velocity
 from ur_sim_driver.robot.robot_state import NORMAL, RUNNING, RobotState
 from ur_sim_driver.robot.safety import ContactSafety, limit_cause
 from ur_sim_driver.robot.sim_config import SimConfig, sim_config_from_params
@@ -293,6 +295,9 @@ class UrSimNode(Node):
         with self._lock:
             self.controller_manager.apply_pending()
             state = self.sim.state()
+            # What the hardware reads and the controllers see: velocities as the robot's controller counts them
+            # (encoders.py). The robot's own servo works on the simulated state.
+            reported = dataclasses.replace(state, qd=reported_velocity(state.qd, self.sim.control_dt))
             self.robot.update(state.t)
             self._controller_stopper()
             hardware = self.controller_manager.hardware
@@ -300,9 +305,9 @@ class UrSimNode(Node):
             commander = next((c for c in self._commanders if c.active), self._holder) if hardware.writes \
                 else self._holder
             if commander is not self._commander:
-                commander.take_over(state)
+                commander.take_over(reported)
                 self._commander = commander
-            sample, stop = commander.command(state, self.sim.control_dt)
+            sample, stop = commander.command(reported, self.sim.control_dt)
             tcp_position, tcp_orientation = self.sim.tcp_pose()
             wrench = self.sim.wrench()
             if getattr(commander, 'free', False):  # freedrive: the robot compensates gravity, the arm is free
@@ -322,7 +327,7 @@ class UrSimNode(Node):
             robot_factor, total_factor = self.scaling.factor, self.scaling.total
             self.host.check_waiters()
         if hardware.reads or self._last_read is None:
-            self._last_read = (state, tcp_position, tcp_orientation, wrench)
+            self._last_read = (reported, tcp_position, tcp_orientation, wrench)
         # Not read (the driver is disconnected): the state interfaces keep the values last read.
         measured, tcp_position, tcp_orientation, wrench = self._last_read
         cycle = Cycle(self._cycle, state.t, conv.time_parts(state.t), measured, sample, tau, robot_factor,
