@@ -13,6 +13,7 @@ from sensor_msgs.msg import JointState
 from sim_harness import point, running_sim, wait_for
 
 from ur_sim_driver.description.tool import DISPENSER
+from ur_sim_driver.robot.payload import make_payload
 
 G = np.array([0.0, 0.0, -9.81])  # [m/s^2] in base_link (MuJoCo's default gravity; base_link is the world)
 TILTED = [0.4, -1.1, 1.2, -0.6, 1.0, 0.3]  # tool0 tilted on every axis: every wrench component non-zero
@@ -92,8 +93,9 @@ def test_wrench_at_rest_is_the_weight_and_zero_ftsensor_zeroes_it():
         assert ef < 0.01 and et < 0.01
 
         payload_cog = np.array([0.01, -0.02, 0.12])
+        payload = make_payload(2.0, payload_cog, np.array([0.004, 0.004, 0.002, 0.0, 0.0, 0.0]))
         with h.sim.host.lock:
-            h.sim.sim.set_payload(2.0, payload_cog, np.array([0.004, 0.004, 0.002, 0.0, 0.0, 0.0]))
+            h.sim.sim.mount(payload)  # what a hand would do: set_payload only changes the robot's belief
             t_set = round(h.sim.sim.time * 1e9)
         h.wait_sim_time(0.5)  # the arm settles under the new load
         q, w = streams.pair_after(round(h.sim.sim.time * 1e9) - 1)
@@ -103,6 +105,14 @@ def test_wrench_at_rest_is_the_weight_and_zero_ftsensor_zeroes_it():
         print(f'tool + 2 kg payload: expected {np.round(expected, 5)}, measured {np.round(w, 5)}; '
               f'error force {100 * ef:.2e} %, torque {100 * et:.2e} %')
         assert np.linalg.norm(w[:3]) > 4 * DISPENSER.mass * 9.81  # the weight grew 5-fold
+        assert ef < 0.01 and et < 0.01
+
+        # The robot told of the payload (set_payload) takes its weight off the reading: the tool's is left.
+        with h.sim.host.lock:
+            h.sim.sim.set_payload(payload.mass, payload.cog, payload.inertia)
+            t_set = round(h.sim.sim.time * 1e9)
+        q, w = streams.pair_after(t_set)
+        ef, et = relative_error(w, expected_wrench(h.sim.sim.urdf, q, tool))
         assert ef < 0.01 and et < 0.01
 
         with h.sim.host.lock:

@@ -1,8 +1,10 @@
-"""Payload at the flange: validation, principal axes, and the joint efforts at rest it adds (against
-Pinocchio's gravity torques of our URDF with the payload on tool0)."""
+"""Payload at the flange: validation, principal axes, the joint efforts at rest a mounted payload adds (against
+Pinocchio's gravity torques of our URDF with the payload on tool0), and set_payload as the controller's belief: it
+moves nothing, and is taken off the force-torque reading."""
 import numpy as np
 import pinocchio as pin
 import pytest
+from scipy.spatial.transform import Rotation
 
 from ur_sim_driver.errors import ConfigError
 from ur_sim_driver.motion.trajectory import TrajectorySample
@@ -40,22 +42,58 @@ def pinocchio_gravity(urdf: str, q, payload=None) -> np.ndarray:
     return pin.computeGeneralizedGravity(model, data, np.asarray(q, dtype=float))
 
 
+def mounted(tool: str = 'none', **payload) -> Simulator:
+    params = {'tool': tool, 'initial_positions': list(POSE)}
+    if payload:
+        params.update({'mounted_payload.mass': payload['mass'], 'mounted_payload.cog': list(payload['cog']),
+                       'mounted_payload.inertia': list(payload['inertia'])})
+    return Simulator(sim_config_from_params(params))
+
+
 @pytest.mark.parametrize('tool', ['none', 'dispenser'])
-def test_payload_changes_efforts_at_rest_by_its_gravity_torque(tool):
-    sim = Simulator(sim_config_from_params({'tool': tool, 'initial_positions': list(POSE)}))
-    before = hold(sim, POSE, 200)
-    sim.set_payload(**PAYLOAD)
-    after = hold(sim, POSE, 500)
-    expected = pinocchio_gravity(sim.urdf, POSE, PAYLOAD) - pinocchio_gravity(sim.urdf, POSE)
+def test_a_mounted_payload_changes_efforts_at_rest_by_its_gravity_torque_and_set_payload_does_not(tool):
+    without, loaded = mounted(tool), mounted(tool, **PAYLOAD)
+    before, after = hold(without, POSE, 500), hold(loaded, POSE, 500)
+    expected = pinocchio_gravity(loaded.urdf, POSE, PAYLOAD) - pinocchio_gravity(loaded.urdf, POSE)
     assert np.linalg.norm(expected) > 5.0  # the pose gives the payload real leverage
     # Per joint within 1 % of the largest change (joint 1 carries no gravity torque about its vertical axis).
     err = np.abs((after - before) - expected).max() / np.abs(expected).max()
     print(f'payload {tool}: expected {np.round(expected, 4)}, measured {np.round(after - before, 4)}, '
           f'max error {100 * err:.2e} %')
     assert err < 0.01
-    # Taking the payload off (mass 0) gives back the efforts without it.
-    sim.set_payload(0.0, np.zeros(3), np.zeros(6))
-    np.testing.assert_allclose(hold(sim, POSE, 500), before, atol=1e-6 * np.abs(before).max())
+    # Telling the robot of a payload mounts nothing.
+    without.set_payload(**PAYLOAD)
+    np.testing.assert_allclose(hold(without, POSE, 500), before, atol=1e-9 * np.abs(before).max())
+
+
+@pytest.mark.parametrize('believed', [0.0, 1.0, 3.0, 4.5])
+def test_the_wrench_reads_the_mounted_payload_less_the_believed_one(believed):
+    """A free arm with 3 kg mounted reads the weight of 3 kg less what the robot believes: about zero with the
+    right belief, the difference with a wrong one, as a UR's compensated force-torque reading does."""
+    sim = mounted(**PAYLOAD)
+    hold(sim, POSE, 500)
+    sim.set_payload(believed, PAYLOAD['cog'], PAYLOAD['inertia'] if believed else np.zeros(6))
+    force, torque = sim.wrench()[:3], sim.wrench()[3:]
+    assert np.linalg.norm(force) == pytest.approx(abs(PAYLOAD['mass'] - believed) * 9.81, abs=1e-6)
+    np.testing.assert_allclose(torque, np.cross(PAYLOAD['cog'], force), atol=1e-9)
+    # the residual force is the difference's weight: straight down in the base frame
+    rot = Rotation.from_quat(sim.tcp_pose()[1])
+    np.testing.assert_allclose(rot.apply(force), [0.0, 0.0, -(PAYLOAD['mass'] - believed) * 9.81], atol=1e-6)
+
+
+def test_zero_ftsensor_keeps_the_compensation():
+    sim = mounted(**PAYLOAD)
+    hold(sim, POSE, 200)
+    sim.zero_ftsensor()
+    assert np.abs(sim.wrench()).max() < 1e-9
+    sim.set_payload(**PAYLOAD)  # now believed: its weight comes off the (zeroed) reading
+    assert np.linalg.norm(sim.wrench()[:3]) == pytest.approx(PAYLOAD['mass'] * 9.81, abs=1e-6)
+
+
+def test_a_bad_mounted_payload_names_the_parameters():
+    with pytest.raises(ConfigError) as info:
+        sim_config_from_params({'mounted_payload.mass': -1.0})
+    assert "'mounted_payload.*'" in str(info.value) and 'mass = -1.0 kg is outside [0, 100.0] kg' in str(info.value)
 
 
 def test_the_state_is_untouched_by_set_payload():
@@ -74,8 +112,7 @@ def test_invalid_payload_is_refused_and_the_old_one_kept():
     with pytest.raises(ConfigError, match='mass'):
         sim.set_payload(-1.0, np.zeros(3), np.zeros(6))
     assert sim.payload.mass == 1.0
-    body = sim.physics.model.body('payload')
-    assert body.mass[0] == 1.0
+    assert sim.physics.model.body('payload').mass[0] == 0.0  # a belief: nothing was mounted
 
 
 @pytest.mark.parametrize('args, field', [

@@ -9,6 +9,7 @@ from typing import Any
 from ur_sim_driver.description.params import UR_TYPES
 from ur_sim_driver.errors import ConfigError
 from ur_sim_driver.robot.dispenser import DispenserParams, dispenser_params
+from ur_sim_driver.robot.payload import NO_PAYLOAD, Payload, make_payload
 from ur_sim_driver.robot.safety import DEFAULT_CONTACT_FORCE, DEFAULT_FORCE_WINDOW
 from ur_sim_driver.robot.software import SoftwareVersion, default_version, parse_version
 
@@ -62,6 +63,8 @@ class SimConfig:
     constraints: tuple[JointConstraint, ...] = (JointConstraint(),) * 6
     publish_frequency: float = 20.0  # [Hz] of simulated time: robot_state_publisher's /tf
     dispenser: DispenserParams = DispenserParams()  # the glue dispenser's model (tool: dispenser only)
+    # What is physically mounted at the flange besides the tool (set_payload only changes the controller's belief).
+    mounted_payload: Payload = NO_PAYLOAD
     software_version: SoftwareVersion | None = None  # the controller's software; None: the type's default
     # The driver's launch arguments that change what a client sees (ur_control.launch.py, same names and defaults).
     initial_joint_controller: str = 'scaled_joint_trajectory_controller'
@@ -193,6 +196,7 @@ def sim_config_from_params(params: Mapping[str, Any]) -> SimConfig:
         publish_frequency=_number('publish_frequency', get('publish_frequency', d.publish_frequency), 0.0, 1000.0,
                                   lo_open=True),
         dispenser=dispenser_params(params),
+        mounted_payload=_mounted_payload(params),
         initial_joint_controller=_ros_name('initial_joint_controller',
                                            get('initial_joint_controller', d.initial_joint_controller)),
         activate_joint_controller=bool(get('activate_joint_controller', d.activate_joint_controller)),
@@ -201,6 +205,19 @@ def sim_config_from_params(params: Mapping[str, Any]) -> SimConfig:
         use_tool_communication=_tool_communication(get('use_tool_communication', d.use_tool_communication)),
         hardware_components_initial_state=_initial_hardware_state(params, ur_type),
     )
+
+
+def _mounted_payload(params: Mapping[str, Any]) -> Payload:
+    """`mounted_payload.mass` [kg], `.cog` (3,) [m] in tool0, `.inertia` (6,) ixx iyy izz ixy ixz iyz [kg m^2]."""
+    get = params.get
+    mass = get('mounted_payload.mass', 0.0)
+    cog = get('mounted_payload.cog', [0.0, 0.0, 0.0])
+    inertia = get('mounted_payload.inertia', [0.0] * 6)
+    try:
+        return make_payload(mass, list(cog), list(inertia))
+    except (ConfigError, TypeError, ValueError) as exc:
+        raise ConfigError(f"parameters 'mounted_payload.*' (mass {mass!r}, cog {cog!r}, inertia {inertia!r}): "
+                          f'{exc}') from None
 
 
 def _initial_hardware_state(params: Mapping[str, Any], component: str) -> str:

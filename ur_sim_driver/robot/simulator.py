@@ -5,6 +5,7 @@ import math
 from typing import Protocol
 
 import numpy as np
+from scipy.spatial.transform import Rotation
 
 from ur_sim_driver.description.mjcf import (
     FT_FORCE_SENSOR,
@@ -99,7 +100,10 @@ class Simulator:
         self._servo_active = False  # the servo made the last cycle's setpoint (not freedrive, not before any)
         # The robot's IO (immutable; replaced under the simulation lock, read as one snapshot without it).
         self.io = IoBank()
-        self.payload: Payload = NO_PAYLOAD
+        self.payload: Payload = NO_PAYLOAD  # what the controller believes is mounted (set_payload)
+        self.mounted: Payload = NO_PAYLOAD  # what is mounted (the configuration's mounted_payload)
+        if cfg.mounted_payload.mass > 0.0:
+            self.mount(cfg.mounted_payload)
         self._ft_offset = np.zeros(6)
         # The gravity the robot's controller believes in (set_gravity: anti-gravity in the base frame [m/s^2]);
         # None: the one the arm is under, as a correctly installed robot's.
@@ -172,7 +176,10 @@ class Simulator:
         return self.physics.tcp_pose()
 
     def set_payload(self, mass: float, cog: np.ndarray, inertia: np.ndarray) -> None:
-        """Mount a payload at the flange (call under the simulation lock).
+        """The robot's set_payload (call under the simulation lock): what the controller believes is mounted.
+
+        It changes nothing physical: the mounted payload is the configuration's (``mounted_payload``); the belief
+        is taken off the force-torque reading (:meth:`wrench`), as a UR compensates its sensor with it.
 
         Args:
             mass: [kg] (0: none).
@@ -182,17 +189,28 @@ class Simulator:
         Raises:
             ConfigError: an invalid value (see ``payload.make_payload``); the payload is unchanged then.
         """
-        payload = make_payload(mass, cog, inertia)
+        self.payload = make_payload(mass, cog, inertia)
+
+    def mount(self, payload: Payload) -> None:
+        """Physically mount `payload` at the flange (under the simulation lock); the belief is unchanged."""
         moments, quat = payload.principal()
         self.physics.set_payload(payload.mass, payload.cog, moments, quat)
-        self.payload = payload
+        self.mounted = payload
+
+    def _believed_weight(self) -> np.ndarray:
+        """(6,) the force [N] and torque [N m] about tool0, in tool0 axes, that the believed payload's weight
+        exerts on the flange, under the gravity the controller believes in."""
+        g_base = -self.gravity_belief if self.gravity_belief is not None else self.physics.gravity_in_base()
+        _, quat = self.physics.tcp_pose()  # tool0 in the base frame, (x, y, z, w)
+        force = self.payload.mass * (Rotation.from_quat(quat).inv().apply(g_base))
+        return np.concatenate((force, np.cross(self.payload.cog, force)))
 
     def wrench(self) -> np.ndarray:
-        """(6,) force [N] and torque [N m] measured at the flange, in tool0 axes about the tool0 origin
-        (the driver's tool0_controller frame): what tool, payload and contacts exert on the arm, less the
-        reading at the last :meth:`zero_ftsensor`."""
-        return self.physics.wrench() - self._ft_offset
+        """(6,) force [N] and torque [N m] at the flange, in tool0 axes about the tool0 origin (the driver's
+        tool0_controller frame), as the robot reports it: what tool, mounted payload and contacts exert on the arm,
+        less the believed payload's weight (set_payload) and less the reading at the last :meth:`zero_ftsensor`."""
+        return self.physics.wrench() - self._believed_weight() - self._ft_offset
 
     def zero_ftsensor(self) -> None:
         """Take the current reading as the sensor's zero, as the robot's zero_ftsensor does."""
-        self._ft_offset = self.physics.wrench()
+        self._ft_offset = self.physics.wrench() - self._believed_weight()
