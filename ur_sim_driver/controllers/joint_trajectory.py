@@ -223,5 +223,10 @@ class JointTrajectoryControllerComponent(JointCommandController):
         return sample.positions.copy() if sample is not None else self.host.sim.state().q
 
     def _finish(self, outcome: Outcome) -> None:
+        log = self.node.get_logger() if self.node is not None else None
+        if log is not None and outcome.detail:
+            log.error(outcome.detail)  # upstream prints the joint and its error (tolerances.hpp, show_errors)
         if outcome.token is not None:
             self._link.send(Ended(outcome.token, outcome.code, outcome.message))
+        elif log is not None:
+            log.error(outcome.message)  # a topic trajectory held on its tolerances: no goal to end

@@ -13,11 +13,17 @@ joint_trajectory_controller as the UR driver configures it (``scaled_joint_traje
   same way with its own message (upstream leaves such a goal running against the topic's trajectory,
   which then reports on a motion it did not ask for; we end it instead, as a user expects);
 * while running, and on the first sample even when that is already the last point (upstream: "in case
-  the first sample is the last point"), the path tolerance is checked for action goals; a violation
-  aborts with PATH_TOLERANCE_VIOLATED and holds the measured position;
-* after the last point, the goal tolerance (position, and velocity against
-  ``stopped_velocity_tolerance``) decides SUCCESSFUL, or GOAL_TOLERANCE_VIOLATED once ``goal_time`` has
+  the first sample is the last point"), the path tolerance is checked; a violation holds the measured position
+  and aborts an action goal with PATH_TOLERANCE_VIOLATED "Aborted due to path tolerance violation" (a topic
+  trajectory, checked against the default tolerances, is held: "Holding position due to state tolerance
+  violation"); success reads "Goal successfully reached!" and a missed goal time "Aborted due to
+  goal_time_tolerance exceeding by <s> seconds" (upstream's words; which joint failed goes to the log);
+* after the last point, the goal tolerance decides SUCCESSFUL, or GOAL_TOLERANCE_VIOLATED once ``goal_time`` has
   passed (0 = wait without limit, as upstream); after success the last point is held;
+* velocity errors are checked (path and goal tolerances, ``stopped_velocity_tolerance``) only where the controller
+  commands velocity or effort (upstream ``compute_error_for_joint``: a velocity error exists only with a velocity
+  state interface and a velocity or effort command interface). The driver's JTCs command position only
+  (``ur_controllers.yaml``), so their velocity tolerances are never checked: ``velocity_errors`` is False;
 * cancel holds the measured position.
 """
 from __future__ import annotations
@@ -38,6 +44,16 @@ INACTIVE_GOAL = "Can't accept new action goals. Controller is not running."
 INACTIVE_TOPIC = "Can't accept new commands. subscriber is inactive"
 PREEMPTED_BY_ACTION = 'Current goal preempted by new incoming action.'
 PREEMPTED_BY_TOPIC = 'Current goal preempted by a new trajectory on the joint_trajectory topic.'
+# The result's error_string and the log's words (ur_controllers' scaled_joint_trajectory_controller.cpp update()).
+GOAL_REACHED = 'Goal successfully reached!'
+PATH_ABORTED = 'Aborted due to path tolerance violation'
+TOPIC_PATH_HOLD = 'Holding position due to state tolerance violation'
+TOPIC_GOAL_TIME_HOLD = 'Exceeded goal_time_tolerance: holding position...'
+
+
+def goal_time_aborted(time_since_end: float) -> str:
+    """The error_string of a goal that missed its goal time: `time_since_end` [s] past the last point."""
+    return f'Aborted due to goal_time_tolerance exceeding by {time_since_end:.6f} seconds'
 
 
 @dataclass(frozen=True)
@@ -45,14 +61,17 @@ class Outcome:
     """How an action goal ended.
 
     Attributes:
-        token: the goal's token as given to :meth:`TrajectoryController.start`.
+        token: the goal's token as given to :meth:`TrajectoryController.start`; None for a topic trajectory the
+            controller stopped (held) on its tolerances.
         code: control_msgs FollowJointTrajectory result code.
-        message: error_string ('' on success).
+        message: error_string, upstream's words.
+        detail: which joint left which tolerance by how much, for the log ('' when none).
     """
 
-    token: Hashable
+    token: Hashable | None
     code: int
     message: str
+    detail: str = ''
 
 
 class TrajectoryController:
@@ -79,8 +98,9 @@ class TrajectoryController:
     def __init__(self, joint_names: tuple[str, ...], defaults: SegmentTolerances,
                  hold_positions: np.ndarray, v_max: np.ndarray, a_max: np.ndarray,
                  speed_scaling: float = 1.0, scaling: RobotSpeedScaling | None = None,
-                 scaled: bool = True) -> None:
+                 scaled: bool = True, velocity_errors: bool = False) -> None:
         self.joint_names = tuple(joint_names)
+        self.velocity_errors = velocity_errors  # a velocity or effort command interface (the UR config: none)
         self.defaults = defaults
         self.speed_scaling = float(speed_scaling)
         self.scaling = scaling if scaling is not None else RobotSpeedScaling(v_max, a_max, speed_scaling)
@@ -118,7 +138,7 @@ class TrajectoryController:
             points: validated trajectory in controller order.
             now: current time [s].
             q, qd: (n,) measured state [rad], [rad/s]; the first segment starts from it.
-            token: identifies an action goal; None for a topic message (no tolerance supervision).
+            token: identifies an action goal; None for a topic message (held on its default tolerances).
             tolerances: resolved tolerances of the goal (defaults when None).
 
         Returns:
@@ -182,38 +202,41 @@ class TrajectoryController:
             self.scaling.update(raw.velocities, raw.positions - q, self.speed_scaling, period)
             sample = raw._replace(velocities=raw.velocities * total, accelerations=raw.accelerations * total**2)
             self._traj_time += period * total
-            if self._token is not None:
-                outcome = self._supervise(sample, t_sample - traj.end_time, q, qd)
+            # Action goals and topic trajectories alike (the topic's with the default tolerances).
+            outcome = self._supervise(sample, t_sample - traj.end_time, q, qd)
             self._first_sample = False
-            if outcome is None and sample.ended and self._token is None:
-                # Topic trajectories (and finished goals) end by holding their last point.
-                self.hold(sample.positions)
         self.last_sample = sample
         return sample, outcome
 
     def _supervise(self, sample: TrajectorySample, time_since_end: float, q: np.ndarray,
                    qd: np.ndarray) -> Outcome | None:
+        """Upstream's checks each cycle: a path tolerance violation (while moving, and on the first sample) holds
+        the measured position; past the last point, the goal tolerance ends the goal (success: the last point is
+        held) or, after goal_time, holds the measured position. A topic trajectory (no token) is held the same
+        way, with no result to send: the outcome then only carries what to log."""
         tol = self._tolerances
         err_q = sample.positions - q
-        err_qd = sample.velocities - qd
+        err_qd = sample.velocities - qd if self.velocity_errors else None
         token = self._token
         if not sample.ended or self._first_sample:
             reason = check_path(err_q, err_qd, None, tol, self.joint_names)
             if reason is not None:
                 self.hold(q)
-                return Outcome(token, result_codes.PATH_TOLERANCE_VIOLATED, reason)
+                return Outcome(token, result_codes.PATH_TOLERANCE_VIOLATED,
+                               PATH_ABORTED if token is not None else TOPIC_PATH_HOLD, reason)
             if not sample.ended:
                 return None
-        # Past the end the goal state is the last point at rest: velocity is judged against 0.
-        reason = check_goal(err_q, -qd, None, tol, self.joint_names)
+        # Past the end the goal state is the last point at rest: velocity (where checked) is judged against 0.
+        reason = check_goal(err_q, -qd if self.velocity_errors else None, None, tol, self.joint_names)
         code = goal_outcome(time_since_end, reason, tol.goal_time)
         if code is None:
             return None
         if code == result_codes.SUCCESSFUL:
             self.hold(sample.positions)
-            return Outcome(token, code, '')
+            return Outcome(token, code, GOAL_REACHED) if token is not None else None
         self.hold(q)
-        return Outcome(token, code, f'{reason} after goal_time {tol.goal_time:.3f} s')
+        message = goal_time_aborted(time_since_end) if token is not None else TOPIC_GOAL_TIME_HOLD
+        return Outcome(token, code, message, f'{reason} after goal_time {tol.goal_time:.3f} s')
 
     def _hold_sample(self) -> TrajectorySample:
         """The sample of the held position, built once per hold: read-only arrays, shared by every cycle."""
