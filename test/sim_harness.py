@@ -15,6 +15,7 @@ from builtin_interfaces.msg import Duration
 from control_msgs.action import FollowJointTrajectory
 from control_msgs.msg import JointTolerance, SpeedScalingFactor
 from lifecycle_msgs.msg import State
+from rcl_interfaces.msg import Log
 from rclpy.callback_groups import ReentrantCallbackGroup
 from rclpy.executors import MultiThreadedExecutor, SingleThreadedExecutor
 from rclpy.node import Node
@@ -277,6 +278,7 @@ class SimHarness:
         self._scaling_topic = p('speed_scaling_state_broadcaster/speed_scaling')
         self._recorder: Node | None = None
         self._listeners: list = []
+        self._rosout: list[tuple[str, str]] | None = None
         ready_action(self.action)
         wait_still(lambda: self.topic.get_subscription_count() > 0, what='the joint_trajectory subscriber')
 
@@ -320,6 +322,13 @@ class SimHarness:
         executor = SingleThreadedExecutor(context=self.client.context)
         executor.add_node(node)
         self._listeners.append((node, SpinThread(executor, node.get_name()).start()))
+
+    def rosout(self) -> list[tuple[str, str]]:
+        """(logger name, text) of every /rosout line from the first call on; the list grows as lines arrive."""
+        if self._rosout is None:
+            self._rosout = []
+            self.listen(Log, '/rosout', lambda msg: self._rosout.append((msg.name, msg.msg)))
+        return self._rosout
 
     def close(self) -> None:
         """Stop recording and listening."""

@@ -10,7 +10,6 @@ import re
 import numpy as np
 import pytest
 from action_msgs.msg import GoalStatus
-from rcl_interfaces.msg import Log
 from sim_harness import point, running_sim, trajectory, wait_for, wait_still
 
 from ur_sim_driver.description.params import load_ur_params
@@ -94,9 +93,7 @@ def test_jump_at_time_zero_is_a_path_violation_and_the_arm_holds(robot):
     h = robot
     q0 = h.q
     target = q0 + 0.8
-    if not hasattr(h, 'log_lines'):
-        h.log_lines = []
-        h.listen(Log, '/rosout', lambda msg: h.log_lines.append((msg.name, msg.msg)))
+    log = h.rosout()
     rec = h.record()
     handle = h.send(h.goal([point(target, 0.0)]))
     assert handle.accepted
@@ -104,8 +101,8 @@ def test_jump_at_time_zero_is_a_path_violation_and_the_arm_holds(robot):
     assert (status, code) == (GoalStatus.STATUS_ABORTED, rc.PATH_TOLERANCE_VIOLATED)
     assert text == 'Aborted due to path tolerance violation'
     # Which joint, by how much: in the controller's log, as upstream prints it.
-    wait_still(lambda: any('exceeds the tolerance' in m for _, m in h.log_lines), what='the tolerance log line')
-    logged = [m for n, m in h.log_lines if 'exceeds the tolerance' in m and n.endswith('joint_trajectory_controller')]
+    wait_still(lambda: any('exceeds the tolerance' in m for _, m in log), what='the tolerance log line')
+    logged = [m for n, m in log if 'exceeds the tolerance' in m and n.endswith('joint_trajectory_controller')]
     error = float(re.search(r'position error ([0-9.]+) rad exceeds the tolerance', logged[-1]).group(1))
     assert abs(error - 0.8) < 1e-3, logged  # the arm settles from the move before by a few 1e-5 rad
     h.wait_sim_time(0.5)
