@@ -5,7 +5,6 @@ import math
 from typing import Protocol
 
 import numpy as np
-from scipy.spatial.transform import Rotation
 
 from ur_sim_driver.description.mjcf import (
     FT_FORCE_SENSOR,
@@ -53,6 +52,10 @@ class JointReference(Protocol):
     positions: np.ndarray  # (n,) [rad]
     velocities: np.ndarray  # (n,) [rad/s]
     accelerations: np.ndarray  # (n,) [rad/s^2]
+
+
+_NO_WRENCH = np.zeros(6)
+_NO_WRENCH.flags.writeable = False
 
 
 class Simulator:
@@ -200,10 +203,19 @@ class Simulator:
     def _believed_weight(self) -> np.ndarray:
         """(6,) the force [N] and torque [N m] about tool0, in tool0 axes, that the believed payload's weight
         exerts on the flange, under the gravity the controller believes in."""
+        mass = self.payload.mass
+        if mass == 0.0:  # every cycle reads the wrench: no payload believed, nothing to take off
+            return _NO_WRENCH
         g_base = -self.gravity_belief if self.gravity_belief is not None else self.physics.gravity_in_base()
-        _, quat = self.physics.tcp_pose()  # tool0 in the base frame, (x, y, z, w)
-        force = self.payload.mass * (Rotation.from_quat(quat).inv().apply(g_base))
-        return np.concatenate((force, np.cross(self.payload.cog, force)))
+        _, (x, y, z, w) = self.physics.tcp_pose()  # tool0 in the base frame (unit quaternion)
+        gx, gy, gz = (float(v) for v in g_base)
+        # F = m R^T g, R the quaternion's rotation matrix, written out in floats (every cycle while a payload is
+        # believed: SciPy's Rotation costs 50 us, numpy's small-array calls 25 us)
+        fx = mass * ((1 - 2 * (y * y + z * z)) * gx + 2 * (x * y + z * w) * gy + 2 * (x * z - y * w) * gz)
+        fy = mass * (2 * (x * y - z * w) * gx + (1 - 2 * (x * x + z * z)) * gy + 2 * (y * z + x * w) * gz)
+        fz = mass * (2 * (x * z + y * w) * gx + 2 * (y * z - x * w) * gy + (1 - 2 * (x * x + y * y)) * gz)
+        cx, cy, cz = (float(v) for v in self.payload.cog)
+        return np.array((fx, fy, fz, cy * fz - cz * fy, cz * fx - cx * fz, cx * fy - cy * fx))
 
     def wrench(self) -> np.ndarray:
         """(6,) force [N] and torque [N m] at the flange, in tool0 axes about the tool0 origin (the driver's

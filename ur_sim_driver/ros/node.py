@@ -12,7 +12,6 @@ publishes on /clock.
 """
 from __future__ import annotations
 
-import dataclasses
 import gc
 import os
 import signal
@@ -53,6 +52,7 @@ from ur_sim_driver.gateway.memory import use_mmap_for_large_blocks
 from ur_sim_driver.motion import conversions as conv
 from ur_sim_driver.motion.jtc import TrajectoryController
 from ur_sim_driver.motion.tolerances import default_tolerances
+from ur_sim_driver.physics.physics import ArmState
 from ur_sim_driver.robot.encoders import reported_velocity
 from ur_sim_driver.robot.robot_state import NORMAL, RUNNING, RobotState
 from ur_sim_driver.robot.safety import ContactSafety, limit_cause
@@ -297,7 +297,7 @@ class UrSimNode(Node):
             state = self.sim.state()
             # What the hardware reads and the controllers see: velocities as the robot's controller counts them
             # (encoders.py). The robot's own servo works on the simulated state.
-            reported = dataclasses.replace(state, qd=reported_velocity(state.qd, self.sim.control_dt))
+            reported = ArmState(state.t, state.q, reported_velocity(state.qd, self.sim.control_dt), state.effort)
             self.robot.update(state.t)
             self._controller_stopper()
             hardware = self.controller_manager.hardware
