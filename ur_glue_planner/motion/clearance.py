@@ -8,6 +8,7 @@ touch itself is not chosen. The glass is not part of it: the nozzle is meant to 
 from __future__ import annotations
 
 from dataclasses import dataclass
+from functools import lru_cache
 
 import mujoco
 import numpy as np
@@ -17,6 +18,12 @@ from ur_sim_driver.description.params import URParams
 from ur_sim_driver.description.tool import ToolDef
 
 _WORLD = 0  # MuJoCo's world body: the floor's
+
+
+@lru_cache(maxsize=32)
+def _model(robot: URParams, tool: ToolDef | None) -> mujoco.MjModel:
+    """The compiled collision model of an arm and tool, built once (9 ms of the planner's 40 ms otherwise)."""
+    return mujoco.MjModel.from_xml_string(build_mjcf(robot, tool=tool))
 
 
 @dataclass(frozen=True)
@@ -46,8 +53,8 @@ class Clearance:
     """
 
     def __init__(self, robot: URParams, tool: ToolDef | None) -> None:
-        self._model = mujoco.MjModel.from_xml_string(build_mjcf(robot, tool=tool))
-        self._data = mujoco.MjData(self._model)
+        self._model = _model(robot, tool)
+        self._data = mujoco.MjData(self._model)  # one per checker: the model is shared, read only
         self._n = 6
 
     def _name(self, geom: int) -> str:
@@ -61,7 +68,11 @@ class Clearance:
             d.qpos[:self._n] = qk
             mujoco.mj_kinematics(m, d)
             mujoco.mj_collision(m, d)
-            deepest = min(d.contact[:d.ncon], key=lambda c: c.dist, default=None)
-            if deepest is not None and deepest.dist < 0.0:
-                return Touch(k, (self._name(deepest.geom1), self._name(deepest.geom2)), -float(deepest.dist))
+            if d.ncon == 0:
+                continue
+            dist = d.contact.dist[:d.ncon]  # the contacts' struct-of-arrays view: no per-contact objects
+            i = int(np.argmin(dist))
+            if dist[i] < 0.0:
+                geom = d.contact.geom[i]
+                return Touch(k, (self._name(int(geom[0])), self._name(int(geom[1]))), -float(dist[i]))
         return None
