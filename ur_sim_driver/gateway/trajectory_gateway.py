@@ -262,8 +262,8 @@ class TrajectoryGateway:
         if waiter.canceled:
             goal_handle.canceled()
             self.log.info('Goal canceled; holding the measured position')
-            return FollowJointTrajectory.Result(error_code=result_codes.SUCCESSFUL,
-                                                error_string='Goal canceled by the client.')
+            # An empty result, as upstream's controllers give a canceled goal (goal_cancelled_callback).
+            return FollowJointTrajectory.Result()
         ended = waiter.ended
         result = FollowJointTrajectory.Result(error_code=ended.code, error_string=ended.message)
         if ended.code == result_codes.SUCCESSFUL and not ended.aborted:
