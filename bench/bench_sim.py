@@ -19,6 +19,8 @@ import numpy as np
 import rclpy
 from builtin_interfaces.msg import Duration
 from control_msgs.action import FollowJointTrajectory
+from control_msgs.msg import JointTrajectoryControllerState
+from geometry_msgs.msg import PoseStamped, WrenchStamped
 from rclpy.context import Context
 from rclpy.executors import SingleThreadedExecutor
 from rclpy.node import Node
@@ -26,7 +28,10 @@ from rclpy.qos import QoSProfile
 from rclpy.wait_for_message import wait_for_message
 from rosgraph_msgs.msg import Clock
 from sensor_msgs.msg import JointState
+from std_msgs.msg import Float64
+from tf2_msgs.msg import TFMessage
 from trajectory_msgs.msg import JointTrajectoryPoint
+from ur_msgs.msg import IOStates, ToolDataMsg
 
 from ur_glue_planner.execution.action_client import ActionClient
 from ur_sim_driver.motion.jtc import TrajectoryController
@@ -107,16 +112,31 @@ def _clock_sample(node: Node) -> tuple[float, float]:
     return wall, msg.clock.sec + msg.clock.nanosec * 1e-9
 
 
-def fast_mode_rtf(rounds: int = 5, window: float = 4.0, raw_seconds: float = 2.0, *args: str) -> dict:
+# Every topic ur_sim publishes each control cycle (robot_state_publisher's /tf: 20 Hz), with its type.
+PER_CYCLE_TOPICS = (
+    ('/joint_states', JointState), ('/tf', TFMessage), ('/tcp_pose_broadcaster/pose', PoseStamped),
+    ('/scaled_joint_trajectory_controller/controller_state', JointTrajectoryControllerState),
+    ('/speed_scaling_state_broadcaster/speed_scaling', Float64),
+    ('/io_and_status_controller/io_states', IOStates), ('/io_and_status_controller/tool_data', ToolDataMsg),
+    ('/force_torque_sensor_broadcaster/wrench', WrenchStamped), ('/clock', Clock))
+
+
+def fast_mode_rtf(rounds: int = 5, window: float = 4.0, raw_seconds: float = 2.0, *args: str,
+                  listen_all: bool = False) -> dict:
     """RTF of the ur_sim process in as-fast-as-possible mode, measured from outside, and of bare mj_step on the same
     model, interleaved: this machine's speed drifts by a factor of up to 2 from minute to minute, so each round
     pauses ur_sim (SIGSTOP) for `raw_seconds` of bare mj_step, resumes it (SIGCONT) and takes two /clock samples
     `window` [s] of wall time apart. The ratio is taken per round; its median is the figure. `args` are more
-    parameters for ur_sim."""
+    parameters for ur_sim. ur_sim sends only the topics someone subscribes to (``cdr_template.listened``);
+    `listen_all`: a subscription on every per-cycle topic all along (raw, never taken: the sending is measured,
+    not this process's reading)."""
     sim = _SimProcess('-p', 'real_time_factor:=0.0', *args)
     ctx = Context()
     rclpy.init(context=ctx)
     node = Node('bench_clock_probe', context=ctx)
+    if listen_all:
+        for topic, msg_type in PER_CYCLE_TOPICS:
+            node.create_subscription(msg_type, topic, lambda _: None, QoSProfile(depth=1), raw=True)
     cfg = {'ur_type': 'ur5e'}
     rows = []
     try:
@@ -251,15 +271,22 @@ def tracking_error(ur_type: str = 'ur5e') -> dict:
             'per_joint_mrad': (worst * 1e3).round(4).tolist()}
 
 
-def cycle_profile(cycles: int = 5000) -> dict:
+def cycle_profile(cycles: int = 5000, listen_all: bool = True) -> dict:
     """Where one control cycle's time goes, in-process (ur5e, 500 Hz, holding), without an executor: the mean
     wall time [us] of each active component's update (its topics: building and publishing) and of the rest of
-    the cycle (the locked part: robot state, controller, servo, computed torque, physics step, safety)."""
+    the cycle (the locked part: robot state, controller, servo, computed torque, physics step, safety).
+    `listen_all`: every per-cycle topic has a subscriber (another node of this process, never taking its
+    messages), so every topic is built and sent; without, none is."""
     from ur_sim_driver.ros.node import UrSimNode  # here: the benchmark's other parts need no in-process node
 
     ctx = Context()
     rclpy.init(context=ctx, domain_id=int(os.environ.get('UR_SIM_BENCH_PROFILE_DOMAIN', '179')))
     node = UrSimNode(context=ctx, start=False)
+    listener = Node('bench_listener', context=ctx)
+    if listen_all:
+        subs = [listener.create_subscription(msg_type, topic, lambda _: None, QoSProfile(depth=1), raw=True)
+                for topic, msg_type in PER_CYCLE_TOPICS]
+        _wait(lambda: all(s.get_publisher_count() > 0 for s in subs), 30.0, 'matched per-cycle topics')
     spent: dict[str, float] = {}
 
     def timed(name: str, update):
@@ -284,14 +311,16 @@ def cycle_profile(cycles: int = 5000) -> dict:
     finally:
         node.shutdown()
         node.destroy_node()
+        listener.destroy_node()
         rclpy.try_shutdown(context=ctx)
     per = {name: 1e6 * s / cycles for name, s in sorted(spent.items(), key=lambda kv: -kv[1]) if s > 0}
     return {'cycle_us': 1e6 * total, 'control_and_physics_us': 1e6 * total - sum(per.values()),
-            'components_us': per, 'cycles': cycles}
+            'components_us': per, 'cycles': cycles, 'every_topic_listened': listen_all}
 
 
 def run() -> dict:
     fast = fast_mode_rtf()
+    listened = fast_mode_rtf(listen_all=True)
     periods = realtime_periods(60.0)
     latency = realtime_rate_and_latency()
     return {
@@ -300,7 +329,10 @@ def run() -> dict:
                     'load_average_1min': os.getloadavg()[0]},
         'fast_mode': {'ur_type': 'ur5e', 'control_rate_hz': 500, **fast,
                       'targets': {'rtf': 30.0, 'ratio_to_raw': 0.10}},
+        # The same with a subscriber on every per-cycle topic: each one built and sent.
+        'fast_mode_every_topic_listened': {'ur_type': 'ur5e', 'control_rate_hz': 500, **listened},
         'cycle_profile': cycle_profile(),
+        'cycle_profile_nothing_listened': cycle_profile(listen_all=False),
         'real_time': {**periods, 'nominal_rate_hz': 500},
         'goal_latency': {k: latency[k] for k in ('goal_to_first_motion_ms',)},
         'tracking': [tracking_error('ur5e'), tracking_error('ur10')],

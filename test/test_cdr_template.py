@@ -8,7 +8,10 @@ import numpy as np
 import pytest
 from control_msgs.msg import JointTrajectoryControllerState
 from geometry_msgs.msg import PoseStamped, TransformStamped, WrenchStamped
+from rclpy.node import Node
+from rclpy.qos import DurabilityPolicy, QoSProfile
 from rclpy.serialization import deserialize_message, serialize_message
+from ros_helpers import executor_with, ros_context, spin_until
 from rosgraph_msgs.msg import Clock
 from sensor_msgs.msg import JointState
 from std_msgs.msg import Float64
@@ -113,3 +116,26 @@ def test_unknown_field_is_named() -> None:
         CdrTemplate(PoseStamped(), floats=('pose.positon.x',))
     with pytest.raises(UrSimError, match="'header.stmp'"):
         CdrTemplate(PoseStamped(), stamps=('header.stmp',))
+
+
+def test_a_topic_is_sent_only_while_a_subscription_is_matched() -> None:
+    """listened(): what DDS would deliver to. A volatile topic without a matched reader reaches no one, so the loop
+    skips it; a transient-local one is always sent (a late joiner gets the last sample)."""
+    with ros_context() as ctx:
+        pub_node, sub_node = Node('cdr_pub', context=ctx), Node('cdr_sub', context=ctx)
+        with executor_with(ctx, pub_node, sub_node) as executor:
+            template = CdrTemplate(Float64(), floats=('data',),
+                                   publisher=pub_node.create_publisher(Float64, 'cdr_listened', 10))
+            latched = CdrTemplate(Float64(), floats=('data',), publisher=pub_node.create_publisher(
+                Float64, 'cdr_latched', QoSProfile(depth=1, durability=DurabilityPolicy.TRANSIENT_LOCAL)))
+            assert not template.listened()
+            assert latched.listened()
+            received: list[float] = []
+            subscription = sub_node.create_subscription(Float64, 'cdr_listened', lambda m: received.append(m.data),
+                                                        10)
+            spin_until(executor, template.listened, 30.0, 'the subscription matched')
+            template.publish((2.5,))
+            spin_until(executor, lambda: received, 30.0, 'the message')
+            assert received == [2.5]
+            sub_node.destroy_subscription(subscription)
+            spin_until(executor, lambda: not template.listened(), 30.0, 'the subscription unmatched')

@@ -12,6 +12,11 @@ The offsets are found by serializing the prototype with a distinct sentinel in e
 the bytes for it (a sentinel must occur exactly once). In CDR every float64 sits 8-aligned counted from the end of
 the 4-byte encapsulation header, and every 32-bit integer 4-aligned, so one float64 view (from byte 4) and one
 uint32 view (from byte 0) of the buffer reach all of them: a cycle's patch is two fancy-index assignments.
+
+A message no subscription is matched to reaches no one: DDS delivers a sample only to the readers its writer has
+matched when it is written, and these topics are volatile (no late joiner gets an old sample). So each cycle asks
+DDS (``listened``, 0.13 us) and builds and sends only what someone receives; what that buys is in
+``docs/performance.md``.
 """
 from __future__ import annotations
 
@@ -22,6 +27,7 @@ from collections.abc import Callable, Sequence
 
 import numpy as np
 from rclpy.publisher import Publisher
+from rclpy.qos import DurabilityPolicy
 from rclpy.serialization import serialize_message
 
 from ur_sim_driver.errors import UrSimError
@@ -116,6 +122,7 @@ class CdrTemplate:
         self._double_index = np.array(double_index, dtype=np.intp)
         self._word_index = np.array(word_index, dtype=np.intp)
         self._publish_raw = raw_publish(publisher) if publisher is not None else None
+        self.listened = listened(publisher) if publisher is not None else (lambda: False)
 
     def render(self, values: np.ndarray | Sequence[float], stamp: tuple[int, int] | None = None) -> bytes:
         """The message's bytes with `values` (the float fields flattened, in order) and every stamp set to `stamp`
@@ -135,6 +142,15 @@ class CdrTemplate:
             self._doubles[self._double_index] = values
         if stamp is not None and self.stamp_count:
             self._words[self._word_index] = stamp * self.stamp_count
+
+
+def listened(publisher: Publisher) -> Callable[[], bool]:
+    """A call that tells whether a subscription is matched to `publisher` now (DDS's matched readers, asked each
+    call). A transient-local publisher counts as always listened to: a late joiner receives what it kept."""
+    if publisher.qos_profile.durability == DurabilityPolicy.TRANSIENT_LOCAL:
+        return lambda: True
+    count = publisher.handle.get_subscription_count
+    return lambda: count() > 0
 
 
 def raw_publish(publisher: Publisher) -> Callable[[bytes], None]:

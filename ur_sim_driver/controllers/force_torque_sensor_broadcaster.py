@@ -29,4 +29,5 @@ class ForceTorqueSensorBroadcaster(Component):
                                 publisher=self._pub)
 
     def update(self, cycle: Cycle) -> None:
-        self._cdr.publish(cycle.wrench, cycle.stamp_parts)
+        if self._cdr.listened():
+            self._cdr.publish(cycle.wrench, cycle.stamp_parts)

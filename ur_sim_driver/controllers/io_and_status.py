@@ -39,7 +39,7 @@ from ur_msgs.msg import Analog, Digital, IOStates, ToolDataMsg
 from ur_msgs.srv import SetAnalogOutput, SetIO, SetPayload, SetSpeedSliderFraction
 
 from ur_sim_driver.controllers.base import Component, Cycle, Host
-from ur_sim_driver.controllers.cdr_template import raw_publish
+from ur_sim_driver.controllers.cdr_template import listened, raw_publish
 from ur_sim_driver.description.params import load_ur_params
 from ur_sim_driver.errors import ConfigError
 from ur_sim_driver.robot.io_bank import (
@@ -96,6 +96,7 @@ class IoAndStatusController(Component):
         self._pub_io = node.create_publisher(IOStates, p('io_states'), 10)
         self._pub_tool = node.create_publisher(ToolDataMsg, p('tool_data'), 10)
         self._publish_io, self._publish_tool = raw_publish(self._pub_io), raw_publish(self._pub_tool)
+        self._io_listened, self._tool_listened = listened(self._pub_io), listened(self._pub_tool)
         latched = QoSProfile(depth=1, durability=DurabilityPolicy.TRANSIENT_LOCAL)
         self._pub_robot_mode = node.create_publisher(RobotMode, p('robot_mode'), latched)
         self._pub_safety_mode = node.create_publisher(SafetyMode, p('safety_mode'), latched)
@@ -121,8 +122,7 @@ class IoAndStatusController(Component):
         key = (robot.robot_mode, robot.safety_mode, robot.program_state, robot.loaded_program)
         if io is self._io_seen and key == self._key:
             # Nothing changed since the last cycle (nearly always): the same bytes go out again.
-            self._publish_io(self._io_bytes)
-            self._publish_tool(self._tool_bytes)
+            self._send()
             return
         self._key = key
         status = robot.status()
@@ -134,8 +134,7 @@ class IoAndStatusController(Component):
             # here, a publish costs about 3 us instead of about 58 us (40 nested messages converted each time).
             self._io_bytes = serialize_message(self._io_msg)
             self._tool_bytes = serialize_message(self._tool_msg)
-        self._publish_io(self._io_bytes)
-        self._publish_tool(self._tool_bytes)
+        self._send()
         if last is None or status.robot_mode != last.robot_mode:
             self._pub_robot_mode.publish(RobotMode(mode=status.robot_mode))
         if last is None or status.safety_mode != last.safety_mode:
@@ -143,6 +142,13 @@ class IoAndStatusController(Component):
         if last is None or status.program_running != last.program_running:
             self._pub_running.publish(Bool(data=status.program_running))
         self._status = status
+
+    def _send(self) -> None:
+        """This cycle's io_states and tool_data, to whoever is subscribed (``cdr_template.listened``)."""
+        if self._io_listened():
+            self._publish_io(self._io_bytes)
+        if self._tool_listened():
+            self._publish_tool(self._tool_bytes)
 
     def _fill(self, io: IoBank, status: RobotStatus) -> None:
         m = self._io_msg

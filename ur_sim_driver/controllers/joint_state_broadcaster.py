@@ -31,5 +31,7 @@ class JointStateBroadcaster(Component):
                                 publisher=self._pub)
 
     def update(self, cycle: Cycle) -> None:
+        if not self._cdr.listened():
+            return
         state = cycle.state
         self._cdr.publish(np.concatenate((state.q, state.qd, state.effort)), cycle.stamp_parts)

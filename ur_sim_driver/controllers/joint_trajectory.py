@@ -143,8 +143,9 @@ class JointTrajectoryControllerComponent(JointCommandController):
         q_ref, qd_ref = sample.positions, sample.velocities
         # The controller reports the factor it advances trajectory time by; the broadcaster the robot's own.
         factor = cycle.total_factor if self.scaled else 1.0
-        self._state_cdr.publish(pack_state(q_ref, qd_ref, sample.accelerations, state.q, state.qd, cycle.effort,
-                                           factor, self._state_values), cycle.stamp_parts)
+        if self._state_cdr.listened():
+            self._state_cdr.publish(pack_state(q_ref, qd_ref, sample.accelerations, state.q, state.qd, cycle.effort,
+                                               factor, self._state_values), cycle.stamp_parts)
         token = self._token
         if token is not None and cycle.index % self._feedback_every == 0:
             self._link.send(Feedback(token, state.t, (sample.positions, sample.velocities, sample.accelerations),

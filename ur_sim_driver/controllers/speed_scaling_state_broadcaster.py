@@ -24,4 +24,5 @@ class SpeedScalingStateBroadcaster(Component):
         self._cdr = CdrTemplate(Float64(), floats=('data',), publisher=self._pub)
 
     def update(self, cycle: Cycle) -> None:
-        self._cdr.publish((cycle.robot_factor * 100.0,))
+        if self._cdr.listened():
+            self._cdr.publish((cycle.robot_factor * 100.0,))

@@ -40,6 +40,11 @@ class TcpPoseBroadcaster(Component):
             *(f'transforms[0].transform.rotation.{a}' for a in axes[1])), publisher=self._pub_tf)
 
     def update(self, cycle: Cycle) -> None:
+        pose, tf = self._pose.listened(), self._tf.listened()
+        if not (pose or tf):
+            return
         values = np.concatenate((cycle.tcp_position, cycle.tcp_orientation))
-        self._pose.publish(values, cycle.stamp_parts)
-        self._tf.publish(values, cycle.stamp_parts)
+        if pose:
+            self._pose.publish(values, cycle.stamp_parts)
+        if tf:
+            self._tf.publish(values, cycle.stamp_parts)

@@ -12,4 +12,4 @@ INDEX = types.Array(types.int64, 1, 'A', readonly=True)  # (n,) indices
 OUT1 = types.Array(types.float64, 1, 'A')  # (n,) written
 OUT2 = types.Array(types.float64, 2, 'A')  # (n, m) written
 FLAGS = types.Array(types.boolean, 1, 'A')  # (n,) written
-F8, B1, VOID = types.float64, types.boolean, types.void
+F8, I8, B1, VOID = types.float64, types.int64, types.boolean, types.void

@@ -8,7 +8,7 @@ import mujoco
 import numpy as np
 
 from ur_sim_driver.errors import ConfigError
-from ur_sim_driver.physics.mj_readout import read_dynamics, read_joints
+from ur_sim_driver.physics.mj_readout import read_dynamics, read_joints, read_pose
 
 
 @dataclass(frozen=True)
@@ -241,9 +241,9 @@ class ArmPhysics:
     def tcp_pose(self) -> tuple[np.ndarray, np.ndarray]:
         """TCP pose in the base frame: position (3,) [m] and quaternion (4,) as (x, y, z, w), w >= 0 (as the
         driver's, which builds it from an axis and an angle in [0, pi])."""
-        w, x, y, z = self._d_sensordata[self._tcp_orientation]
-        sign = 1.0 if w >= 0.0 else -1.0
-        return self._d_sensordata[self._tcp_position].copy(), np.array([sign * x, sign * y, sign * z, sign * w])
+        pose = np.empty(7)
+        read_pose(self._d_sensordata, self._tcp_position.start, self._tcp_orientation.start, pose)
+        return pose[:3], pose[3:]
 
     def wrench(self) -> np.ndarray:
         """(6,) force [N] and torque [N m] that the bodies beyond tool0 (tool, payload) exert on the arm,

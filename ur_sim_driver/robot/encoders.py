@@ -18,6 +18,9 @@ from __future__ import annotations
 import math
 
 import numpy as np
+from numba import njit
+
+from ur_sim_driver.physics.numba_types import F8, IN1, OUT1
 
 TICK = 2.0 * math.pi / 2**20  # [rad] one encoder tick [EST]
 
@@ -29,5 +32,13 @@ def velocity_step(control_dt: float) -> float:
 
 def reported_velocity(qd: np.ndarray, control_dt: float) -> np.ndarray:
     """Joint velocities (n,) [rad/s] as the controller reports them: `qd` in whole ticks per period (0.0 at rest)."""
-    step = velocity_step(control_dt)
-    return np.round(np.asarray(qd, dtype=float) / step) * step + 0.0  # + 0.0: no -0.0
+    return _to_ticks(np.asarray(qd, dtype=float), velocity_step(control_dt))
+
+
+@njit(OUT1(IN1, F8), cache=True)
+def _to_ticks(qd, step):
+    # Every control cycle: compiled, as numpy's round, divide and multiply on 6 values cost about 5 us a cycle.
+    out = np.empty(qd.shape[0])
+    for i in range(qd.shape[0]):
+        out[i] = np.round(qd[i] / step) * step + 0.0  # + 0.0: no -0.0
+    return out

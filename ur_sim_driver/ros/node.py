@@ -360,7 +360,8 @@ class UrSimNode(Node):
         self.controller_manager.program_state_changed(refusal)
 
     def _publish(self, cycle: Cycle) -> None:
-        self._clock_cdr.publish((), cycle.stamp_parts)
+        if self._clock_cdr.listened():
+            self._clock_cdr.publish((), cycle.stamp_parts)
 
     def shutdown(self) -> None:
         """Stop the simulation loop and the controller's interface process, and wait for both."""

@@ -91,6 +91,8 @@ class RobotStatePublisher(Component):
         if t < self._next:
             return
         self._next = (math.floor(t / self._period) + 1) * self._period
+        if not self._tf.listened():
+            return
         turns = Rotation.from_rotvec(cycle.state.q[self._index, None] * _Z)
         rotations = (self._origins * turns).as_quat()  # (k, 4), (x, y, z, w) as ROS orders them
         self._tf.publish(rotations.reshape(-1), cycle.stamp_parts)
