@@ -21,6 +21,7 @@ from trajectory_msgs.msg import JointTrajectory, JointTrajectoryPoint
 
 from bench.bench_sim import HOME, JOINTS, _Probe, _SimProcess, _wait
 from ur_glue_planner.execution.action_client import ActionClient
+from ur_sim_driver.controllers.joint_trajectory import SPEED_SCALING_QOS
 
 N = 100_000
 CTRL = '/scaled_joint_trajectory_controller'
@@ -72,7 +73,7 @@ def run() -> dict:
                                    QoSProfile(depth=1000))
     client = ActionClient(probe.node, FollowJointTrajectory, f'{CTRL}/follow_joint_trajectory')
     topic = probe.node.create_publisher(JointTrajectory, f'{CTRL}/joint_trajectory', 10)
-    scaling = probe.node.create_publisher(SpeedScalingFactor, f'{CTRL}/speed_scaling_input', 10)
+    scaling = probe.node.create_publisher(SpeedScalingFactor, f'{CTRL}/speed_scaling_input', SPEED_SCALING_QOS)
     tmp = Path(tempfile.mkdtemp(prefix='ur_sim_bench_'))
     recorder = None
     try:

@@ -31,6 +31,7 @@ from ur_msgs.srv import SetAnalogOutput, SetIO, SetPayload, SetSpeedSliderFracti
 
 from ur_glue_planner.execution.action_client import ActionClient
 from ur_sim_driver.controllers.base import destroy_node
+from ur_sim_driver.controllers.joint_trajectory import SPEED_SCALING_QOS
 from ur_sim_driver.robot.io_bank import SPAN
 from ur_sim_driver.robot.robot_state import PROTECTIVE_STOP, RUNNING
 from ur_sim_driver.ros.node import UrSimNode
@@ -268,9 +269,8 @@ class SimHarness:
                                    callback_group=ReentrantCallbackGroup())
         self.topic = _HandedOver(client.create_publisher(JointTrajectory, p(f'{ctrl}/joint_trajectory'), 10),
                                  lambda: sim.commands_received, 'the joint_trajectory message at ur_sim')
-        controller = sim._trajectory[ctrl]
-        self.scaling = _HandedOver(client.create_publisher(SpeedScalingFactor, p(f'{ctrl}/speed_scaling_input'), 10),
-                                   lambda: controller.speed_scaling_received, 'the speed_scaling_input message')
+        self._scaling_inputs: dict[str, _HandedOver] = {}
+        self.scaling = self.speed_scaling_input(ctrl)
         self.recording: Recording | None = None
         self.keeper: RobotKeeper | None = None  # set by running_sim: brings the robot back after each test
         self.pacer: Pacer | None = None  # set by running_sim for a paced simulation
@@ -281,6 +281,19 @@ class SimHarness:
         self._rosout: list[tuple[str, str]] | None = None
         ready_action(self.action)
         wait_still(lambda: self.topic.get_subscription_count() > 0, what='the joint_trajectory subscriber')
+
+    def speed_scaling_input(self, controller: str) -> _HandedOver:
+        """A publisher on trajectory controller `controller`'s ~/speed_scaling_input, with upstream's QoS (transient
+        local: a volatile publisher does not match it), whose publish() returns once the controller handled it."""
+        if controller not in self._scaling_inputs:
+            component = self.sim._trajectory[controller]
+            publisher = self.client.create_publisher(SpeedScalingFactor,
+                                                     self.sim.cfg.prefixed(f'{controller}/speed_scaling_input'),
+                                                     SPEED_SCALING_QOS)
+            wait_still(lambda: publisher.get_subscription_count() > 0, what=f'{controller}/speed_scaling_input')
+            self._scaling_inputs[controller] = _HandedOver(publisher, lambda: component.speed_scaling_received,
+                                                           'the speed_scaling_input message')
+        return self._scaling_inputs[controller]
 
     def _on_js(self, msg: JointState) -> None:
         rec = self.recording

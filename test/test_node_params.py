@@ -33,7 +33,7 @@ def test_seed_ur10_preset_names_exist():
     ('ur_type', 'ur6', "'ur_type' = 'ur6' is invalid; valid choices: ur3, ur3e, ur5, ur5e, ur7e, ur8long, ur10, "
                        'ur10e, ur12e, ur15, ur16e, ur18, ur20, ur30'),
     ('real_time_factor', -1.0, "'real_time_factor' = -1.0 is outside the allowed range [0.0, 100.0]"),
-    ('speed_scaling_initial_factor', 1.5, "'speed_scaling_initial_factor' = 1.5 is outside"),
+    ('speed_scaling.initial_scaling_factor', -0.5, "'speed_scaling.initial_scaling_factor' = -0.5 is outside"),
     ('tool', 'gripper', "'tool' = 'gripper' is invalid; valid choices: none, dispenser"),
     ('initial_positions', [0.0, 0.0, 4.0, 0.0, 0.0, 0.0], "'initial_positions' [2] = 4.0 rad is outside"),
     ('thread_priority', 120, "'thread_priority' = 120 must be an integer in [0, 99]"),

@@ -1,8 +1,8 @@
 """JointTrajectory topic, interpolation order, speed scaling and partial goals on a running ur_sim."""
 import numpy as np
 from action_msgs.msg import GoalStatus
-from control_msgs.msg import SpeedScalingFactor
-from sim_harness import point, running_sim, trajectory, wait_for
+from sim_harness import point, running_sim, trajectory, wait_answer, wait_still
+from ur_msgs.srv import SetSpeedSliderFraction
 
 from ur_sim_driver.motion import result_codes as rc
 
@@ -72,12 +72,16 @@ def test_cubic_and_quintic_are_told_apart_in_joint_states():
     assert 0.01 < early_speed['quintic'] < 0.03
 
 
-def test_speed_scaling_half_doubles_the_execution_time():
+def test_speed_slider_at_half_doubles_the_scaled_controllers_execution_time():
+    """The scaled controller advances trajectory time by the robot's speed scaling, which the slider multiplies
+    (the robot keeper puts the slider back after the test)."""
     durations = {}
     with running_sim() as h:
-        for factor in (1.0, 0.5):
-            h.scaling.publish(SpeedScalingFactor(factor=factor))
-            wait_for(lambda f=factor: h.sim.jtc.speed_scaling == f, what='the speed scaling factor')
+        slider = h.client.create_client(SetSpeedSliderFraction, '/io_and_status_controller/set_speed_slider')
+        wait_still(slider.service_is_ready, what='set_speed_slider')
+        for fraction in (1.0, 0.5):
+            request = SetSpeedSliderFraction.Request(speed_slider_fraction=fraction)
+            assert wait_answer(slider.call_async(request)).success
             q0 = h.q
             target = q0 + np.array([0.3, -0.2, 0.2, 0, 0, 0])
             h.record()
@@ -85,23 +89,8 @@ def test_speed_scaling_half_doubles_the_execution_time():
             assert h.result(handle)[1] == rc.SUCCESSFUL
             h.wait_sim_time(0.3)  # the goal succeeds within the goal tolerance; record the settling too
             t, q, _ = h.stop_recording().arrays()
-            durations[factor] = _settle_time(t, q, target) - _first_motion_time(t, q, q0)
+            durations[fraction] = _settle_time(t, q, target) - _first_motion_time(t, q, q0)
     assert abs(durations[0.5] / durations[1.0] - 2.0) < 0.05
-
-
-def test_speed_scaling_zero_pauses_and_bad_factor_is_ignored():
-    with running_sim() as h:
-        h.scaling.publish(SpeedScalingFactor(factor=2.0))  # outside [0, 1]: ignored
-        h.scaling.publish(SpeedScalingFactor(factor=0.0))
-        wait_for(lambda: h.sim.jtc.speed_scaling == 0.0, what='factor 0')
-        q0 = h.q
-        h.topic.publish(trajectory(h.joints, [point(q0 + 0.3, 1.0, ZERO)]))
-        h.wait_sim_time(2.0)
-        assert np.abs(h.q - q0).max() < 1e-3
-        h.scaling.publish(SpeedScalingFactor(factor=1.0))
-        wait_for(lambda: h.sim.jtc.speed_scaling == 1.0, what='factor 1')  # in fast mode DDS latency is sim time
-        h.wait_sim_time(1.5)
-        assert np.abs(h.q - (q0 + 0.3)).max() < 0.005
 
 
 def test_partial_goal_in_any_order_is_mapped_by_name():

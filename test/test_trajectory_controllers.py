@@ -7,7 +7,7 @@ import pytest
 from action_msgs.msg import GoalStatus
 from cm_helpers import BEST_EFFORT, ControllerManagerClient
 from control_msgs.action import FollowJointTrajectory
-from control_msgs.msg import JointTrajectoryControllerState
+from control_msgs.msg import JointTrajectoryControllerState, SpeedScalingFactor
 from control_msgs.srv import QueryTrajectoryState
 from rclpy.callback_groups import ReentrantCallbackGroup
 from sim_harness import point, ready_action, running_sim, wait_answer, wait_for, wait_still
@@ -68,19 +68,62 @@ def test_one_rad_in_half_a_second_scaled_slows_down_unscaled_violates_the_path(r
     h.cm.switch(activate=[SCALED], deactivate=[JTC])
 
 
-def test_speed_scaling_input_belongs_to_the_scaled_controller(robot):
+def test_the_plain_controller_advances_by_its_own_speed_scaling_input(robot):
+    """ros2_controllers' JTC (jazzy 4.39+): trajectory time advances by the controller's own factor, set through
+    ~/speed_scaling_input (transient local): 2 runs twice as fast, 0 pauses; a negative factor is ignored with
+    upstream's warning."""
     h = robot
     h.cm.switch(activate=[JTC], deactivate=[SCALED], strictness=BEST_EFFORT)
-    from control_msgs.msg import SpeedScalingFactor
-    h.scaling.publish(SpeedScalingFactor(factor=0.0))  # would pause the scaled controller
-    wait_for(lambda: h.sim.jtc.speed_scaling == 0.0, what='the input')
-    q0 = h.q
-    handle = _run(h, JTC, h.goal([point(q0 + 0.2, 1.0, ZERO)]))
-    assert h.result(handle)[1] == rc.SUCCESSFUL
-    assert np.abs(h.q - (q0 + 0.2)).max() < 0.02
-    h.scaling.publish(SpeedScalingFactor(factor=1.0))
-    wait_for(lambda: h.sim.jtc.speed_scaling == 1.0, what='the input')
-    h.cm.switch(activate=[SCALED], deactivate=[JTC])
+    core = h.sim._trajectory[JTC].core
+    scaling = h.speed_scaling_input(JTC)
+    log = h.rosout()
+    try:
+        scaling.publish(SpeedScalingFactor(factor=-1.0))
+        wait_still(lambda: any(m == 'Scaling factor has to be greater or equal to 0.0 - Ignoring input!'
+                               for n, m in log if n == JTC), what='the warning')
+        assert core.speed_scaling == 1.0
+        durations = {}
+        for factor in (2.0, 0.5):
+            scaling.publish(SpeedScalingFactor(factor=factor))
+            t0 = h.sim.sim.time
+            handle = _run(h, JTC, h.goal([point(h.q + 0.1, 1.0, ZERO)]))
+            assert h.result(handle)[1] == rc.SUCCESSFUL
+            durations[factor] = h.sim.sim.time - t0
+        assert abs(durations[2.0] - 0.5) < 0.05 and abs(durations[0.5] - 2.0) < 0.05, durations
+        scaling.publish(SpeedScalingFactor(factor=0.0))
+        q0 = h.q
+        handle = _run(h, JTC, h.goal([point(q0 + 0.2, 1.0, ZERO)]))
+        h.wait_sim_time(1.5)
+        assert np.abs(h.q - q0).max() < 1e-3  # paused
+        scaling.publish(SpeedScalingFactor(factor=1.0))
+        assert h.result(handle)[1] == rc.SUCCESSFUL
+        assert np.abs(h.q - (q0 + 0.2)).max() < 0.02
+    finally:
+        scaling.publish(SpeedScalingFactor(factor=1.0))
+        h.cm.switch(activate=[SCALED], deactivate=[JTC])
+
+
+def test_the_scaled_controller_follows_the_robot_not_its_speed_scaling_input(robot):
+    """a16a268's scaled controller has the inherited ~/speed_scaling_input, but its motion follows the hardware's
+    factor; its controller_state reports the input (upstream's publish_state reports the base class's factor)."""
+    h = robot
+    h.cm.switch(activate=[SCALED], deactivate=[JTC], strictness=BEST_EFFORT)
+    scaling = h.speed_scaling_input(SCALED)
+    states: list[float] = []
+    try:
+        scaling.publish(SpeedScalingFactor(factor=0.0))  # would pause the plain controller
+        h.listen(JointTrajectoryControllerState, f'/{SCALED}/controller_state',
+                 lambda m: states.append(m.speed_scaling_factor), depth=10)
+        q0 = h.q
+        t0 = h.sim.sim.time
+        handle = _run(h, SCALED, h.goal([point(q0 + 0.2, 1.0, ZERO)]))
+        assert h.result(handle)[1] == rc.SUCCESSFUL
+        assert h.sim.sim.time - t0 < 1.1
+        assert np.abs(h.q - (q0 + 0.2)).max() < 0.02
+        wait_for(lambda: states, what='the scaled controller state')
+        assert set(states) == {0.0}
+    finally:
+        scaling.publish(SpeedScalingFactor(factor=1.0))
 
 
 def test_query_state(robot):

@@ -45,7 +45,6 @@ class Cycle:
         reference: the trajectory controller's reference for this cycle.
         effort: (n,) torques applied during the cycle [N m].
         robot_factor: the robot's own speed scaling in [0, 1] (speed slider x its slowdowns).
-        total_factor: the factor the scaled JTC advanced its trajectory time by.
         tcp_position: (3,) tool0 in the base frame [m], at `t`.
         tcp_orientation: (4,) tool0 orientation in the base frame, quaternion (x, y, z, w).
         wrench: (6,) force [N] and torque [N m] of the flange's force-torque sensor in tool0_controller
@@ -59,7 +58,6 @@ class Cycle:
     reference: TrajectorySample
     effort: np.ndarray
     robot_factor: float
-    total_factor: float
     tcp_position: np.ndarray
     tcp_orientation: np.ndarray
     wrench: np.ndarray

@@ -118,7 +118,7 @@ class ForwardCommandController(JointCommandController):
             target = self._r if self._target is None else self._target
             # At rest at the target, which is also where the servo must stop.
             sample = TrajectorySample(target.copy(), zero, zero.copy(), 0, True)
-            host.speed_scaling.update_at_rest(host.speed_scaling.input, period)
+            host.speed_scaling.update_at_rest(period)
             return sample, target
         p = host.sim.params
         wanted = zero if self._target is None else np.clip(self._target, -p.v_max, p.v_max)
@@ -131,5 +131,5 @@ class ForwardCommandController(JointCommandController):
         if beyond.any():
             self._rd[beyond] = 0.0
             self._r = np.clip(self._r, p.q_min - _LIMIT_OVERRUN, p.q_max + _LIMIT_OVERRUN)
-        host.speed_scaling.update_at_rest(host.speed_scaling.input, period)
+        host.speed_scaling.update_at_rest(period)
         return sample, None

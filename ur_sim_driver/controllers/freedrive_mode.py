@@ -104,5 +104,5 @@ class FreedriveModeController(JointCommandController):
         target = state.q.copy() if self.free or self._hold is None else self._hold
         zero = np.zeros_like(state.q)
         host = self.host
-        host.speed_scaling.update_at_rest(host.speed_scaling.input, period)
+        host.speed_scaling.update_at_rest(period)
         return TrajectorySample(target, zero, zero.copy(), 0, True), target

@@ -5,11 +5,16 @@ controller's lifecycle and its interfaces. ``~/follow_joint_trajectory`` and ``~
 the gateway process (``trajectory_gateway.py``, one node per controller there) so that receiving a large goal
 never stalls the simulation loop; this side executes what the gateway hands over and serves, on the controller's
 own node in this process, ``~/controller_state`` (every cycle while active), ``~/query_state``
-(control_msgs/srv/QueryTrajectoryState) and, for the scaled controller, ``~/speed_scaling_input``.
+(control_msgs/srv/QueryTrajectoryState) and ``~/speed_scaling_input`` (control_msgs/msg/SpeedScalingFactor).
 
-The scaled controller advances trajectory time by the robot's speed scaling; joint_trajectory_controller does
-not (``scaled=False``): it runs on real time whatever the robot makes of it, so a motion the robot must slow
-down for ends in a path tolerance violation instead of being stretched.
+The scaled controller advances trajectory time by the robot's speed scaling (the hardware's
+``speed_scaling/speed_scaling_factor``); joint_trajectory_controller by its own factor (``~/speed_scaling_input``,
+1.0 unless told), whatever the robot makes of it, so a motion the robot must slow down for ends in a path
+tolerance violation instead of being stretched. Both take ``~/speed_scaling_input`` as ros2_controllers' JTC does
+for a position-only controller (jazzy 4.39 and later: QoS system default, transient local; a factor below 0 is
+ignored with a warning); in the scaled one (a16a268's ``ScaledJointTrajectoryController``) it changes only the
+``speed_scaling_factor`` its ``controller_state`` reports: the motion follows the hardware's factor, kept in a
+member of the scaled controller's own, while the inherited ``publish_state`` reports the base class's.
 
 Deactivated (by switch_controller or by the controller_stopper), the controller holds the measured position
 and ends its goal aborted (INVALID_GOAL); an inactive controller refuses goals and messages with upstream's
@@ -22,6 +27,8 @@ from control_msgs.msg import JointTrajectoryControllerState, SpeedScalingFactor
 from control_msgs.srv import QueryTrajectoryState
 from rclpy.callback_groups import MutuallyExclusiveCallbackGroup
 from rclpy.node import Node
+from rclpy.qos import DurabilityPolicy, QoSProfile
+from rclpy.qos import qos_profile_system_default as _SYSTEM
 
 from ur_sim_driver.controllers.base import Cycle, Host
 from ur_sim_driver.controllers.cdr_template import CdrTemplate
@@ -40,6 +47,9 @@ from ur_sim_driver.motion.validation import map_to_config_order
 from ur_sim_driver.physics.physics import ArmState
 from ur_sim_driver.robot.sim_config import SimConfig
 
+# ros2_controllers' ~/speed_scaling_input: rclcpp::SystemDefaultsQoS().transient_local()
+SPEED_SCALING_QOS = QoSProfile(history=_SYSTEM.history, depth=_SYSTEM.depth, reliability=_SYSTEM.reliability,
+                               durability=DurabilityPolicy.TRANSIENT_LOCAL)
 SCALED_TYPE = 'ur_controllers/ScaledJointTrajectoryController'
 UNSCALED_TYPE = 'joint_trajectory_controller/JointTrajectoryController'
 DEACTIVATED = 'Current goal cancelled during deactivate transition.'  # upstream's words; the goal is aborted here
@@ -84,9 +94,10 @@ class JointTrajectoryControllerComponent(JointCommandController):
                                                 10)
         node.create_service(QueryTrajectoryState, p(f'{self.name}/query_state'), self._on_query,
                             callback_group=MutuallyExclusiveCallbackGroup())
-        if self.scaled:
-            node.create_subscription(SpeedScalingFactor, p(f'{self.name}/speed_scaling_input'),
-                                     self._on_speed_scaling, 10, callback_group=MutuallyExclusiveCallbackGroup())
+        # Upstream: rclcpp::SystemDefaultsQoS().transient_local(); a volatile publisher does not match it.
+        node.create_subscription(SpeedScalingFactor, p(f'{self.name}/speed_scaling_input'), self._on_speed_scaling,
+                                 SPEED_SCALING_QOS,
+                                 callback_group=MutuallyExclusiveCallbackGroup())
         # controller_state goes out as CDR bytes patched in place (cdr_template.py), with the arrays the
         # controller fills: reference (q, qd, qdd), feedback and error (q, qd), output (q, qd, effort).
         zeros = [0.0] * len(self.core.joint_names)
@@ -141,8 +152,9 @@ class JointTrajectoryControllerComponent(JointCommandController):
     def update(self, cycle: Cycle) -> None:
         state, sample = cycle.state, cycle.reference
         q_ref, qd_ref = sample.positions, sample.velocities
-        # The controller reports the factor it advances trajectory time by; the broadcaster the robot's own.
-        factor = cycle.total_factor if self.scaled else 1.0
+        # The controller's own factor (in the scaled one too, as upstream's publish_state reports it; the robot's
+        # is the speed_scaling_state_broadcaster's).
+        factor = self.core.speed_scaling
         if self._state_cdr.listened():
             self._state_cdr.publish(pack_state(q_ref, qd_ref, sample.accelerations, state.q, state.qd, cycle.effort,
                                                factor, self._state_values), cycle.stamp_parts)
@@ -187,12 +199,14 @@ class JointTrajectoryControllerComponent(JointCommandController):
 
     # ---- ROS callbacks (executor threads) -------------------------------------------------------------------------
     def _on_speed_scaling(self, msg: SpeedScalingFactor) -> None:
+        """Upstream's set_scaling_factor: any factor >= 0 (above 1 speeds up), applied from the next cycle."""
         try:
             f = msg.factor
-            if not (0.0 <= f <= 1.0):
-                self.node.get_logger().error(f'Ignored speed_scaling_input: factor = {f} is outside [0.0, 1.0]; '
-                                             f'keeping {self.core.speed_scaling}')
+            if not f >= 0.0:  # upstream tests `scaling_factor < 0`; NaN is refused here as well
+                self.node.get_logger().warning('Scaling factor has to be greater or equal to 0.0 - Ignoring input!')
                 return
+            if f != self.core.speed_scaling:
+                self.node.get_logger().get_child('speed_scaling').info(f'New scaling factor will be {f:f}')
             with self.host.lock:
                 self.core.speed_scaling = float(f)
         finally:

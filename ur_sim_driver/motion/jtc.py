@@ -2,10 +2,15 @@
 
 One instance owns the active trajectory and decides, every control cycle, the reference the low-level
 controller tracks and whether the active goal has ended. It reproduces ros2_controllers'
-joint_trajectory_controller as the UR driver configures it (``scaled_joint_trajectory_controller``):
+joint_trajectory_controller (jazzy, 4.39 or later) as the UR driver configures it, and the driver's
+``scaled_joint_trajectory_controller`` (``scaled=True``):
 
-* trajectory time advances by ``period x speed_scaling_input x the robot's own factor``
-  (``speed_scaling.py``: the emulated robot slows itself where it cannot follow); an input of 0 pauses;
+* trajectory time advances by ``period x factor`` (upstream ``update``: ``traj_time_ += period * scaling_factor_``).
+  The scaled controller's factor is the hardware's ``speed_scaling/speed_scaling_factor``: the robot's speed scaling
+  (``speed_scaling.py``: slider x the robot's own slowdown where it cannot follow). The plain controller's is its
+  own: ``speed_scaling.initial_scaling_factor``, then each ``~/speed_scaling_input`` (any factor >= 0; 0 pauses,
+  above 1 speeds up; applied at once, as upstream). The scaled controller has that input too (it inherits it) but
+  its motion does not follow it: it reads the hardware's factor every cycle into a member of its own;
 * the reference it returns is in real time: velocities and accelerations are multiplied by that factor
   (and its square), so the robot's servo and torque controller see the motion actually asked of them;
 * a new trajectory replaces the active one; an action goal that is replaced ends with INVALID_GOAL
@@ -82,14 +87,15 @@ class TrajectoryController:
         defaults: default tolerances (from the ``constraints`` parameters).
         hold_positions: (n,) [rad] position held before any trajectory.
         v_max, a_max: (n,) joint velocity [rad/s] and acceleration [rad/s^2] limits of the robot.
-        speed_scaling: initial speed_scaling_input factor in [0, 1].
+        speed_scaling: the controller's own initial factor (``speed_scaling.initial_scaling_factor``), >= 0.
         scaling: the robot's own speed scaling, shared by every controller that commands the robot (a new one
             when None).
-        scaled: advance trajectory time by the speed scaling (the scaled JTC); False ignores it
-            (joint_trajectory_controller): trajectory time is real time, whatever the robot makes of it.
+        scaled: advance trajectory time by the robot's speed scaling (the scaled JTC); False: by the controller's
+            own factor (joint_trajectory_controller), whatever the robot makes of it.
 
     Attributes:
-        speed_scaling: the speed_scaling_input factor in [0, 1] (set by the node).
+        speed_scaling: the controller's own factor, >= 0 (``~/speed_scaling_input``, set by the node; what its
+            controller_state reports, in the scaled controller too).
         scaling: the robot's own speed scaling, updated every cycle.
         stop: (n,) [rad] position the robot must not pass this cycle (the final point while the last
             segment runs, or the hold position), or None.
@@ -103,7 +109,7 @@ class TrajectoryController:
         self.velocity_errors = velocity_errors  # a velocity or effort command interface (the UR config: none)
         self.defaults = defaults
         self.speed_scaling = float(speed_scaling)
-        self.scaling = scaling if scaling is not None else RobotSpeedScaling(v_max, a_max, speed_scaling)
+        self.scaling = scaling if scaling is not None else RobotSpeedScaling(v_max, a_max)
         self.scaled = scaled
         self.stop: np.ndarray | None = np.array(hold_positions, dtype=float)
         self._first_sample = False
@@ -186,7 +192,7 @@ class TrajectoryController:
         if traj is None:
             raw = self._hold_sample()
             # Holding, nothing moves or lags: the scaling's update for a reference at rest.
-            self.scaling.update_at_rest(self.speed_scaling, period)
+            self.scaling.update_at_rest(period)
             self.stop = self._hold
             sample = raw
         else:
@@ -196,10 +202,14 @@ class TrajectoryController:
             raw = traj.sample(t_sample)
             last = len(traj.points.times) - 1
             self.stop = traj.points.positions[last] if raw.ended or raw.segment_index == last else None
-            # The factor read this cycle is the robot's from the previous one (the driver reads it with the
+            # The robot's factor read this cycle is the one of the previous cycle (the driver reads it with the
             # state); what the robot makes of this cycle's reference shows from the next cycle on.
-            total = self.scaling.total if self.scaled else 1.0
-            self.scaling.update(raw.velocities, raw.positions - q, self.speed_scaling, period)
+            if self.scaled:
+                total = self.scaling.factor
+                self.scaling.update(raw.velocities, raw.positions - q, period)
+            else:
+                total = self.speed_scaling
+                self.scaling.update(raw.velocities * total, raw.positions - q, period)
             sample = raw._replace(velocities=raw.velocities * total, accelerations=raw.accelerations * total**2)
             self._traj_time += period * total
             # Action goals and topic trajectories alike (the topic's with the default tolerances).

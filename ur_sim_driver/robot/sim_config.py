@@ -51,7 +51,8 @@ class SimConfig:
     protective_stop_window: float = DEFAULT_FORCE_WINDOW  # [s] the safety system's mean of the contact force
     update_rate: float = 0.0
     physics_substeps: int = 0
-    speed_scaling_initial_factor: float = 1.0
+    # The trajectory controllers' own factor at start (ros2_controllers' speed_scaling.initial_scaling_factor, >= 0).
+    initial_scaling_factor: float = 1.0
     real_time_factor: float = 1.0
     thread_priority: int = 50  # SCHED_FIFO priority of the real-time loop, as ros2_control_node's; 0: normal
     tool: str = 'none'
@@ -180,9 +181,9 @@ def sim_config_from_params(params: Mapping[str, Any]) -> SimConfig:
                                                                      d.protective_stop_window), 0.0, 1.0),
         update_rate=update_rate,
         physics_substeps=substeps,
-        speed_scaling_initial_factor=_number('speed_scaling_initial_factor',
-                                             get('speed_scaling_initial_factor', d.speed_scaling_initial_factor),
-                                             0.0, 1.0),
+        initial_scaling_factor=_number('speed_scaling.initial_scaling_factor',
+                                       get('speed_scaling.initial_scaling_factor', d.initial_scaling_factor),
+                                       0.0, math.inf),
         real_time_factor=_number('real_time_factor', get('real_time_factor', d.real_time_factor), 0.0, 100.0),
         thread_priority=_integer('thread_priority', get('thread_priority', d.thread_priority), 0, 99),
         tool=_choice('tool', get('tool', d.tool), TOOLS),

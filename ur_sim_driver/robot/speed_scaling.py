@@ -17,18 +17,15 @@ Model, per control cycle:
   0 as the arm's lag behind the reference grows from ``LAG_DEAD_ZONE`` to ``LAG_DEAD_ZONE + LAG_SPAN`` (the
   servo is limited in acceleration, or the joint torques saturate);
 * the factor follows the target, falling by at most ``period / FALL_TIME`` per cycle (the robot's reaction
-  time) and rising by at most ``period / RISE_TIME`` (it speeds up again gently);
-* a lower ``speed_scaling_input`` (the user's factor, e.g. 0 to pause) is applied at once, but ramped so
-  that the reference decelerates at the joints' acceleration limit rather than stopping dead, which the arm
-  could not follow without passing the paused reference.
+  time) and rising by at most ``period / RISE_TIME`` (it speeds up again gently).
 
-The speed slider (``set_speed_slider``, the teach pendant's slider) multiplies all of it, as on the robot:
-the reported factor is ``slider x own slowdown`` and trajectory time advances by
-``period x input x slider x own slowdown``. A new slider position is ramped so that the reference velocity
-changes at most at the joints' acceleration limit (at once while the arm holds still), so that moving the
-slider does not jerk a moving arm.
+The speed slider (``set_speed_slider``, the teach pendant's slider) multiplies it, as on the robot: the reported
+factor (the hardware's ``speed_scaling_factor``) is ``slider x own slowdown``, and the scaled JTC advances trajectory
+time by ``period x factor``. A new slider position is ramped so that the reference velocity changes at most at the
+joints' acceleration limit (at once while the arm holds still), so that moving the slider does not jerk a moving arm.
 
-Trajectory time advances by ``period x input x factor`` (``factor`` includes the slider).
+A trajectory controller's own factor (``speed_scaling_input``, ros2_controllers' JTC) is not the robot's: it
+lives in the controller (``motion/jtc.py``); the robot sees only the velocities it is asked for (``rate``).
 
 A motion that is only mildly infeasible is slowed before its lag reaches the path tolerance (0.2 rad by
 default); one that asks far too much (a step, 20 times the speed limit) runs away before the factor has
@@ -48,17 +45,17 @@ VELOCITY_MARGIN = 0.98  # fraction of the velocity limit the scaled reference ma
 SLIDER_MIN, SLIDER_MAX = 0.01, 1.0  # the speed slider's range (set_speed_slider refuses anything else)
 
 
-def velocity_fraction(rate: np.ndarray, v_max: np.ndarray, input_factor: float) -> float:
-    """Largest factor in [0, 1] keeping |rate x input_factor x factor| <= 98 % of v_max.
+def velocity_fraction(rate: np.ndarray, v_max: np.ndarray, gain: float = 1.0) -> float:
+    """Largest factor in [0, 1] keeping |rate x gain x factor| <= 98 % of v_max.
 
     Args:
-        rate: (n,) reference velocity per unit trajectory time [rad/s at factor 1].
+        rate: (n,) reference velocity asked of the robot at factor 1 [rad/s].
         v_max: (n,) velocity limits [rad/s].
-        input_factor: the speed_scaling_input factor, in [0, 1].
+        gain: what already multiplies `rate` (the slider as applied).
     """
     # Largest demand relative to its limit decides; no division by a zero demand.
     # max() of a list: numpy's max costs more than the rest of this function for six joints.
-    worst = max((np.abs(rate) / v_max).tolist()) * input_factor
+    worst = max((np.abs(rate) / v_max).tolist()) * gain
     return 1.0 if worst <= VELOCITY_MARGIN else VELOCITY_MARGIN / worst
 
 
@@ -73,33 +70,26 @@ class RobotSpeedScaling:
 
     Args:
         v_max: (n,) joint velocity limits [rad/s].
-        a_max: (n,) joint acceleration limits [rad/s^2] (for the ramps of the input factor and the slider).
-        input_factor: initial speed_scaling_input factor in [0, 1].
+        a_max: (n,) joint acceleration limits [rad/s^2] (for the slider's ramp).
 
     Attributes:
         own: the robot's own slowdown in [0, 1] (velocity and lag fractions, rate limited).
         slider: the speed slider position asked for, in [0.01, 1] (set by ``set_speed_slider``).
         slider_applied: the slider as applied (ramped towards `slider`, see the module docstring).
-        input: the speed_scaling_input factor as applied (ramped down, see the module docstring).
     """
 
-    def __init__(self, v_max: np.ndarray, a_max: np.ndarray, input_factor: float = 1.0) -> None:
+    def __init__(self, v_max: np.ndarray, a_max: np.ndarray) -> None:
         self.v_max = np.asarray(v_max, dtype=float)
         self.a_max = np.asarray(a_max, dtype=float)
         self.own = 1.0
         self.slider = 1.0
         self.slider_applied = 1.0
-        self.input = float(input_factor)
 
     @property
     def factor(self) -> float:
-        """The robot's speed scaling in [0, 1]: slider x own slowdown (what the broadcaster reports)."""
+        """The robot's speed scaling in [0, 1]: slider x own slowdown (the hardware's speed_scaling_factor, what
+        the broadcaster reports and the scaled JTC advances by)."""
         return self.slider_applied * self.own
-
-    @property
-    def total(self) -> float:
-        """input x factor: what trajectory time advances by per unit of real time."""
-        return self.input * self.factor
 
     def _ramp(self, rate: np.ndarray, gain: float, period: float) -> float:
         """Largest change of a multiplier of `rate` x `gain` in one period keeping the change of every joint's
@@ -108,34 +98,27 @@ class RobotSpeedScaling:
         with np.errstate(divide='ignore'):
             return float(np.min(np.where(speed > 0.0, self.a_max / speed, np.inf))) * period
 
-    def update_at_rest(self, input_factor: float, period: float) -> float:
+    def update_at_rest(self, period: float) -> float:
         """`update` for a reference at rest (zero rate and lag), without its arithmetic: nothing moves, so the
-        input factor and the slider apply at once and the robot needs no slowdown of its own (target 1)."""
-        self.input = float(input_factor)
+        slider applies at once and the robot needs no slowdown of its own (target 1)."""
         self.slider_applied = self.slider
         self.own = min(max(1.0, self.own - period / FALL_TIME), self.own + period / RISE_TIME)
         return self.factor
 
-    def update(self, rate: np.ndarray, lag: np.ndarray, input_factor: float, period: float) -> float:
+    def update(self, rate: np.ndarray, lag: np.ndarray, period: float) -> float:
         """Advance one cycle and return the new factor (slider x own slowdown).
 
         Args:
-            rate: (n,) reference velocity per unit trajectory time [rad/s at factor 1].
+            rate: (n,) reference velocity asked of the robot at factor 1 [rad/s].
             lag: (n,) reference - measured position [rad].
-            input_factor: speed_scaling_input factor in [0, 1].
             period: control period [s].
         """
-        if input_factor < self.input:
-            ramp = self._ramp(rate, self.factor, period)
-            self.input = max(float(input_factor), self.input - ramp)
-        else:
-            self.input = float(input_factor)
         if self.slider != self.slider_applied:
-            ramp = self._ramp(rate, self.input * self.own, period)
+            ramp = self._ramp(rate, self.own, period)
             gap = self.slider - self.slider_applied
             self.slider_applied = self.slider if abs(gap) <= ramp else self.slider_applied + math.copysign(ramp, gap)
         # The slider already slows the reference: the robot's own slowdown is needed only beyond it.
-        target = min(velocity_fraction(rate, self.v_max, self.input * self.slider_applied), lag_fraction(lag))
+        target = min(velocity_fraction(rate, self.v_max, self.slider_applied), lag_fraction(lag))
         step_down, step_up = period / FALL_TIME, period / RISE_TIME
         self.own = min(max(target, self.own - step_down), self.own + step_up)
         return self.factor

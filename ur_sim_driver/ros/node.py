@@ -98,7 +98,7 @@ class UrSimNode(Node):
             goal=[c.goal for c in self.cfg.constraints], stopped_velocity=self.cfg.stopped_velocity_tolerance,
             goal_time=self.cfg.goal_time)
         # The robot's own speed scaling, whichever controller commands it.
-        self.scaling = RobotSpeedScaling(self.sim.params.v_max, self.sim.a_max, self.cfg.speed_scaling_initial_factor)
+        self.scaling = RobotSpeedScaling(self.sim.params.v_max, self.sim.a_max)
         self._lock = threading.Lock()
         self._stop = threading.Event()
         self._cycle = 0
@@ -135,8 +135,8 @@ class UrSimNode(Node):
         feedback_every = round(self.sim.control_rate / self.cfg.action_monitor_rate)
         for name in trajectory_names:
             core = TrajectoryController(self.joints, self._defaults, self.sim.state().q, params.v_max,
-                                        self.sim.a_max, self.cfg.speed_scaling_initial_factor if name == ctrl else 1.0,
-                                        scaling=self.scaling, scaled=name == ctrl)
+                                        self.sim.a_max, self.cfg.initial_scaling_factor,
+                                        scaling=self.scaling, scaled=name != UNSCALED_CONTROLLER)
             self._trajectory[name] = JointTrajectoryControllerComponent(name, core, self.gateway, feedback_every,
                                                                         initially_active=name == initial)
         # The robot's own interpolation for the passthrough controller: the JTC's sampler, scaled by the robot.
@@ -324,14 +324,14 @@ class UrSimNode(Node):
                 # Seen in this cycle's physics step: the arm is halted from the next cycle on.
                 self.robot.protective_stop(self.sim.time, cause)
                 self._controller_stopper()
-            robot_factor, total_factor = self.scaling.factor, self.scaling.total
+            robot_factor = self.scaling.factor
             self.host.check_waiters()
         if hardware.reads or self._last_read is None:
             self._last_read = (reported, tcp_position, tcp_orientation, wrench)
         # Not read (the driver is disconnected): the state interfaces keep the values last read.
         measured, tcp_position, tcp_orientation, wrench = self._last_read
         cycle = Cycle(self._cycle, state.t, conv.time_parts(state.t), measured, sample, tau, robot_factor,
-                      total_factor, tcp_position, tcp_orientation, wrench)
+                      tcp_position, tcp_orientation, wrench)
         for component in self.components:
             if component.active:
                 component.update(cycle)
