@@ -144,3 +144,19 @@ def test_query_state(robot):
     mid = _query(h, SCALED, start + 2.0)
     assert mid.success and abs(mid.position[0] - (q0[0] + 0.2)) < 0.01 and mid.velocity[0] > 0.1
     assert h.result(handle)[1] == rc.SUCCESSFUL
+
+
+def test_controller_state_comes_every_control_cycle(robot):
+    """ros2_controllers 4.39+ publishes controller_state from every update() (ur_controllers.yaml's
+    state_publish_rate is no longer a JTC parameter); ur_sim sends it every cycle while someone subscribes."""
+    h = robot
+    h.cm.switch(activate=[SCALED], deactivate=[JTC], strictness=BEST_EFFORT)
+    stamps: list[float] = []
+    h.listen(JointTrajectoryControllerState, f'/{SCALED}/controller_state',
+             lambda m: stamps.append(conv.time_to_sec(m.header.stamp)), depth=1000)
+    wait_for(lambda: stamps, what='the first controller_state')
+    t_end = h.sim.sim.time + 0.1
+    h.wait_sim_time(0.1)
+    wait_still(lambda: stamps[-1] >= t_end - 0.002 - 1e-9, what='the controller states of 0.1 s')
+    periods = np.diff(np.array(stamps))
+    assert len(periods) >= 50 and np.allclose(periods, h.sim.sim.control_dt, atol=1e-9), periods
