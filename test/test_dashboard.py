@@ -330,10 +330,13 @@ def test_controller_stopper_ends_active_goal_and_holds(d, command, state):
     handle = send_when_active(h, h.goal([point(start + 0.6, 4.0, ZERO)]))
     assert handle.accepted
     h.wait_sim_time(0.5)
+    log = h.rosout()
     d.ok(command)
     status, code, text = h.result(handle)
     assert (status, code) == (GoalStatus.STATUS_ABORTED, rc.INVALID_GOAL)
-    assert text.startswith('the controller was deactivated: ') and state in text
+    assert text == 'Current goal cancelled during deactivate transition.'  # upstream's on_deactivate
+    wait_still(lambda: any(m.startswith('the controller was deactivated: ') and state in m for _, m in log),
+               what='the reason in the log')
     q_stop = h.q
     h.wait_sim_time(1.0)
     assert np.abs(h.q - q_stop).max() < 0.02  # held where it stopped (plus braking), not at the target

@@ -119,9 +119,10 @@ class JointTrajectoryControllerComponent(JointCommandController):
         token = self.core.active_token
         self.core.hold(self.host.sim.state().q)
         if token is not None:
-            reason = DEACTIVATED if self.stop_reason is None else \
-                f'the controller was deactivated: {self.stop_reason}'
-            self._finish(Outcome(token, result_codes.INVALID_GOAL, reason))
+            # Upstream's words whatever the cause (on_deactivate); why (the controller_stopper's robot state) goes
+            # to the log.
+            detail = '' if self.stop_reason is None else f'the controller was deactivated: {self.stop_reason}'
+            self._finish(Outcome(token, result_codes.INVALID_GOAL, DEACTIVATED, detail))
         self._token = None
 
     def refusal(self, topic: bool) -> str | None:
