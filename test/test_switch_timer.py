@@ -13,6 +13,7 @@ def test_clock_runs_unscaled_before_the_start_and_scaled_after():
     assert clock.update(11.4, 0.0) == pytest.approx(0.3)  # paused (speed slider at 0, protective stop)
     assert clock.time == pytest.approx(0.3) and clock.now == pytest.approx(0.3)
     assert ScaledClock(start=1.0).update(0.9, 1.0) == pytest.approx(-0.1)
+    assert clock.update(11.6, 2.0) == pytest.approx(0.7)  # the plain JTC's own factor may exceed 1
 
 
 def test_events_are_due_once_in_time_order_half_a_period_early():

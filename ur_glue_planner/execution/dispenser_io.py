@@ -2,8 +2,12 @@
 
 ``/io_and_status_controller/set_io`` (ur_msgs/SetIO, FUN_SET_DIGITAL_OUT) is the same call on ur_sim and on a
 real UR driver, so against a real robot this switches the real gun. Switch times follow the controller's
-scaled clock (see switch_timer.py) from its ``controller_state`` messages; every call is logged with the
-robot time it was made at. :meth:`off` switches the gun off and waits for the answer: the executor calls it
+scaled clock (see switch_timer.py): the stamps of its ``controller_state`` messages, and the factor it advances
+by. The scaled controller advances by the robot's speed scaling, which only the
+``speed_scaling_state_broadcaster`` reports: its ``controller_state.speed_scaling_factor`` is the base class's
+own factor (upstream's publish_state), 1.0 unless a ``speed_scaling_input`` came. The plain controller advances
+by that own factor, which its ``controller_state`` does report. Every call is logged with the robot time it was
+made at. :meth:`off` switches the gun off and waits for the answer: the executor calls it
 at the end, on failure and on cancel.
 """
 from __future__ import annotations
@@ -14,6 +18,7 @@ from dataclasses import dataclass
 from control_msgs.msg import JointTrajectoryControllerState
 from rclpy.node import Node
 from rclpy.qos import QoSProfile
+from std_msgs.msg import Float64
 from ur_msgs.msg import IOStates
 from ur_msgs.srv import SetIO
 
@@ -22,6 +27,8 @@ from ur_glue_planner.execution.switch_timer import ScaledClock, SwitchEvent, Swi
 
 SET_IO = '/io_and_status_controller/set_io'
 IO_STATES = '/io_and_status_controller/io_states'
+PLAIN_CONTROLLER = 'joint_trajectory_controller'  # advances by its own factor; the others by the robot's
+
 
 
 @dataclass(frozen=True)
@@ -50,14 +57,18 @@ class DispenserIO:
 
     Args:
         node: The client's node (its executor spins elsewhere).
-        controller_state: Topic of the trajectory controller's state (stamp and speed_scaling_factor).
+        controller_state: Topic of the trajectory controller's state (stamps; speed_scaling_factor without
+            `robot_scaling`).
+        robot_scaling: Topic of the robot's speed scaling in percent (std_msgs/Float64) that the controller advances
+            by, or None: the controller_state's own factor.
     The controller's period is taken from the stamps of consecutive state messages: an event is due half a
     period early, so that the call lands in the cycle nearest to its time (within half a period: 1 ms at
     500 Hz, 4 ms at 125 Hz, plus the service's delivery).
     """
 
-    def __init__(self, node: Node, controller_state: str) -> None:
+    def __init__(self, node: Node, controller_state: str, robot_scaling: str | None = None) -> None:
         self.node = node
+        self._robot_factor: float | None = None  # [0, 1] the latest robot speed scaling, when that is the clock's
         self.client = node.create_client(SetIO, SET_IO)
         self._lock = threading.Lock()
         self._clock: ScaledClock | None = None
@@ -70,6 +81,9 @@ class DispenserIO:
         node.create_subscription(JointTrajectoryControllerState, controller_state, self._on_state,
                                  QoSProfile(depth=20))
         node.create_subscription(IOStates, IO_STATES, self._on_io, QoSProfile(depth=20))
+        self._uses_robot_scaling = robot_scaling is not None
+        if robot_scaling is not None:
+            node.create_subscription(Float64, robot_scaling, self._on_robot_scaling, QoSProfile(depth=20))
 
     def available(self, timeout: float = 2.0) -> bool:
         """Whether the set_io service answers (the io_and_status_controller is running)."""
@@ -99,12 +113,26 @@ class DispenserIO:
                 return
             if last is not None and 0.0 < stamp - last < 0.1:
                 self._sequence.half_period = 0.5 * (stamp - last)
-            t = self._clock.update(stamp, msg.speed_scaling_factor)
+            if self._uses_robot_scaling:
+                # Published in the same cycle as this state (a cycle apart at most: the subscriptions are separate).
+                factor = self._robot_factor if self._robot_factor is not None else 1.0
+            else:
+                factor = msg.speed_scaling_factor
+            t = self._clock.update(stamp, factor)
             due = self._sequence.due(t)
         for event in due:
             future = self.client.call_async(SetIO.Request(fun=SetIO.Request.FUN_SET_DIGITAL_OUT, pin=event.pin,
                                                           state=1.0 if event.state else 0.0))
             self._pending.append((event, stamp, t, future))
+
+    @property
+    def robot_factor(self) -> float | None:
+        """The robot's speed scaling [0, 1] last received (None: not received yet, or not this clock's factor)."""
+        return self._robot_factor
+
+    def _on_robot_scaling(self, msg: Float64) -> None:
+        with self._lock:
+            self._robot_factor = msg.data / 100.0
 
     def _on_io(self, msg: IOStates) -> None:
         with self._lock:
@@ -132,3 +160,9 @@ class DispenserIO:
         self.disarm()
         request = SetIO.Request(fun=SetIO.Request.FUN_SET_DIGITAL_OUT, pin=pin, state=0.0)
         return bool(call_idempotent(self.client, request, f'switching pin {pin} off', timeout, resend).success)
+
+
+def dispenser_for(node: Node, prefix: str, controller: str) -> DispenserIO:
+    """The gun switched on the clock of trajectory controller `controller` under namespace `prefix` ('' or '/ns')."""
+    robot = None if controller == PLAIN_CONTROLLER else f'{prefix}/speed_scaling_state_broadcaster/speed_scaling'
+    return DispenserIO(node, f'{prefix}/{controller}/controller_state', robot)

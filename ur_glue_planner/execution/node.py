@@ -22,7 +22,7 @@ import rclpy
 from ur_glue_planner.errors import ClientError, JobError, PlanningError
 from ur_glue_planner.execution.bead_listener import BeadListener
 from ur_glue_planner.execution.client import URClient
-from ur_glue_planner.execution.dispenser_io import SET_IO, DispenserIO
+from ur_glue_planner.execution.dispenser_io import SET_IO, dispenser_for
 from ur_glue_planner.execution.entry import start_ros
 from ur_glue_planner.execution.run import Interrupted, execute
 from ur_glue_planner.job import METHODS, _choice, default_job_path, load_job
@@ -70,8 +70,7 @@ def run_job(params: dict, stop: threading.Event, context=None) -> int:
         return 3
     try:
         prefix = '/' + namespace.strip('/') if namespace.strip('/') else ''
-        gun = DispenserIO(ur.node, f'{prefix}/{controller}/controller_state') if params.get('dispense', True) \
-            else None
+        gun = dispenser_for(ur.node, prefix, controller) if params.get('dispense', True) else None
         if gun is not None and not gun.available(timeout=5.0):
             print(f'ur_glue_planner: no {SET_IO} service: running without switching the dispenser', flush=True)
             gun = None

@@ -32,7 +32,7 @@ class ScaledClock:
             return self.now
         since = self.start if self._last is None else self._last
         if stamp > since:
-            self._t += (stamp - since) * min(max(factor, 0.0), 1.0)
+            self._t += (stamp - since) * max(factor, 0.0)  # the plain JTC's own factor may exceed 1
             self._last = stamp
         self.now = self._t
         return self._t

@@ -23,7 +23,7 @@ from std_msgs.msg import String
 from ur_glue_planner.errors import ClientError, PlanningError
 from ur_glue_planner.execution.bead_listener import BeadListener, BeadPoints
 from ur_glue_planner.execution.client import URClient
-from ur_glue_planner.execution.dispenser_io import DispenserIO
+from ur_glue_planner.execution.dispenser_io import dispenser_for
 from ur_glue_planner.execution.run import Interrupted, describe, execute
 from ur_glue_planner.job import GlueJob
 from ur_glue_planner.motion.plan import GluePlan, plan_job
@@ -136,7 +136,7 @@ class LiveRobot:
                 # The glue gun is switched as by the planner node, where the driver has set_io; the simulated
                 # bead is cleared first where ur_sim has one.
                 prefix = '/' + namespace.strip('/') if namespace.strip('/') else ''
-                gun = DispenserIO(ur.node, f'{prefix}/{controller_name}/controller_state')
+                gun = dispenser_for(ur.node, prefix, controller_name)
                 gun = gun if gun.available(timeout=2.0) else None
                 bead = BeadListener(ur.node) if gun is not None else None
                 bead = bead if bead is not None and bead.available(timeout=1.0) else None
