@@ -174,6 +174,7 @@ def test_protective_stop_unlock_after_five_seconds_and_play():
     # In real time: the 5 s window must not pass while the test is still checking the stop (fast mode might).
     with running_sim(real_time_factor=1.0) as h:
         d = Dashboard(h)
+        log = h.rosout()
         handle = h.send(h.goal([point(h.q + 0.5, 4.0, ZERO)]))
         h.wait_sim_time(0.3)
         with h.sim._lock:
@@ -181,7 +182,8 @@ def test_protective_stop_unlock_after_five_seconds_and_play():
             h.sim.robot.protective_stop(t_stop, 'test contact: tool0 with windshield, 150 N')
         status, code, text = h.result(handle)
         assert (status, code) == (GoalStatus.STATUS_ABORTED, rc.INVALID_GOAL)
-        assert 'PROTECTIVE_STOP' in text and 'windshield' in text
+        assert text == 'Current goal cancelled during deactivate transition.'
+        wait_still(lambda: any('PROTECTIVE_STOP' in m and 'windshield' in m for _, m in log), what='the cause')
         assert d.ok('get_safety_mode').safety_mode.mode == SafetyMode.PROTECTIVE_STOP
         assert d.ok('program_state').state.state == 'PAUSED'
         assert goal_rejected(h, h.q + 0.1)

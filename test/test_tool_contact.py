@@ -177,11 +177,13 @@ def test_without_a_goal_the_same_move_ends_in_a_protective_stop(scene):
     h, seg, cm, tc = scene
     move_to_start(h, seg)
     assert cm.switch(activate=[NAME]).ok  # active, but no goal: nothing watches the tool
+    log = h.rosout()
     handle = h.send(goal_of(h, seg))
     assert handle.accepted
     status, code, text = h.result(handle)
     assert (status, code) == (GoalStatus.STATUS_ABORTED, rc.INVALID_GOAL)
-    assert 'safety mode is PROTECTIVE_STOP' in text
+    assert text == 'Current goal cancelled during deactivate transition.'
+    wait_still(lambda: any('safety mode is PROTECTIVE_STOP' in m for _, m in log), what='the cause in the log')
     assert h.sim.robot.safety_mode == PROTECTIVE_STOP
 
 
