@@ -5,8 +5,9 @@ import pytest
 from ur_sim_driver.controllers.controller_state import ARRAYS, FIELDS, pack_state
 
 
-def _numpy(q_ref, qd_ref, qdd_ref, q, qd, effort, factor):
-    return np.concatenate((q_ref, qd_ref, qdd_ref, q, qd, q_ref - q, qd_ref - qd, q_ref, qd_ref, effort, (factor,)))
+def _numpy(q_ref, qd_ref, qdd_ref, q, qd, q_cmd, factor):
+    # error.velocities: 0.0 in a position-command configuration (upstream's compute_error_for_joint)
+    return np.concatenate((q_ref, qd_ref, qdd_ref, q, qd, q_ref - q, np.zeros_like(qd), q_cmd, (factor,)))
 
 
 @pytest.mark.parametrize('n', [6, 7, 1])
@@ -30,6 +31,6 @@ def test_read_only_and_strided_inputs_are_taken():
     assert np.array_equal(out, _numpy(held, strided, held, strided, held, strided, 0.5))
 
 
-def test_the_field_list_has_ten_arrays_in_the_message_order():
-    assert ARRAYS == 10
+def test_the_field_list_has_eight_arrays_in_the_message_order():
+    assert ARRAYS == 8
     assert [part for part, _ in FIELDS] == ['reference', 'feedback', 'error', 'output']

@@ -11,6 +11,7 @@ from control_msgs.msg import JointTrajectoryControllerState, SpeedScalingFactor
 from control_msgs.srv import QueryTrajectoryState
 from rclpy.callback_groups import ReentrantCallbackGroup
 from sim_harness import point, ready_action, running_sim, wait_answer, wait_for, wait_still
+from ur_msgs.srv import SetSpeedSliderFraction
 
 from ur_glue_planner.execution.action_client import ActionClient
 from ur_sim_driver.motion import conversions as conv
@@ -160,3 +161,29 @@ def test_controller_state_comes_every_control_cycle(robot):
     wait_still(lambda: stamps[-1] >= t_end - 0.002 - 1e-9, what='the controller states of 0.1 s')
     periods = np.diff(np.array(stamps))
     assert len(periods) >= 50 and np.allclose(periods, h.sim.sim.control_dt, atol=1e-9), periods
+
+
+def test_controller_state_is_filled_as_upstream_fills_it(robot):
+    """reference: the trajectory in trajectory time (its velocities not scaled by the slider); error: positions only
+    (no velocity error in a position-command configuration); output: the position command, the trajectory one update
+    period later (command_next_), with no velocities or efforts (no such command interfaces)."""
+    h = robot
+    h.cm.switch(activate=[SCALED], deactivate=[JTC], strictness=BEST_EFFORT)
+    slider = h.client.create_client(SetSpeedSliderFraction, '/io_and_status_controller/set_speed_slider')
+    wait_still(slider.service_is_ready, what='set_speed_slider')
+    assert wait_answer(slider.call_async(SetSpeedSliderFraction.Request(speed_slider_fraction=0.5))).success
+    states: list[JointTrajectoryControllerState] = []
+    h.listen(JointTrajectoryControllerState, f'/{SCALED}/controller_state', states.append, depth=1000)
+    wait_for(lambda: states, what='the first controller_state')
+    q0 = h.q
+    handle = _run(h, SCALED, h.goal([point(q0 + np.array([0.2, 0, 0, 0, 0, 0]), 2.0)]))  # positions only: linear
+    assert h.result(handle)[1] == rc.SUCCESSFUL
+    dt = h.sim.sim.control_dt
+    moving = [m for m in list(states) if 0.01 < m.reference.positions[0] - q0[0] < 0.19]
+    assert len(moving) > 1000  # 4 s at half speed
+    for m in moving:
+        assert m.reference.velocities[0] == pytest.approx(0.1, abs=1e-9)  # 0.2 rad in 2 s of trajectory time
+        assert m.output.positions[0] - m.reference.positions[0] == pytest.approx(0.1 * dt, abs=1e-9)
+        assert list(m.error.velocities) == [0.0] * 6 and len(m.feedback.velocities) == 6
+        assert len(m.output.velocities) == 0 and len(m.output.effort) == 0
+        assert m.error.positions[0] == pytest.approx(m.reference.positions[0] - m.feedback.positions[0], abs=1e-12)

@@ -80,6 +80,8 @@ class JointTrajectoryControllerComponent(JointCommandController):
         self._feedback_every = max(1, feedback_every)
         self._token = None
         self.speed_scaling_received = 0  # speed_scaling_input messages handled
+        self._desired: TrajectorySample | None = None  # this cycle's sample in trajectory time (under the lock)
+        self._output: np.ndarray | None = None  # this cycle's position command, while controller_state is listened
 
     def interfaces(self, cfg: SimConfig) -> tuple[tuple[str, ...], tuple[str, ...]]:
         joints = prefixed_joints(cfg.joints, cfg.tf_prefix)
@@ -99,7 +101,7 @@ class JointTrajectoryControllerComponent(JointCommandController):
                                  SPEED_SCALING_QOS,
                                  callback_group=MutuallyExclusiveCallbackGroup())
         # controller_state goes out as CDR bytes patched in place (cdr_template.py), with the arrays the
-        # controller fills: reference (q, qd, qdd), feedback and error (q, qd), output (q, qd, effort).
+        # controller fills (controller_state.py): reference (q, qd, qdd), feedback and error (q, qd), output (q).
         zeros = [0.0] * len(self.core.joint_names)
         state = JointTrajectoryControllerState(joint_names=list(self.core.joint_names))
         for point, fields in STATE_FIELDS:
@@ -138,6 +140,10 @@ class JointTrajectoryControllerComponent(JointCommandController):
         if outcome is not None:
             self._finish(outcome)
         self._token = self.core.active_token
+        # controller_state's reference and output, read under the lock (a new trajectory may start outside it);
+        # the output costs a second sample, taken only while someone subscribes.
+        self._desired = self.core.desired
+        self._output = self.core.command_positions(period) if self._state_cdr.listened() else None
         return sample, self.core.stop
 
     def halt(self, q: np.ndarray, reason: str) -> None:
@@ -151,19 +157,19 @@ class JointTrajectoryControllerComponent(JointCommandController):
 
     # ---- every cycle while active (simulation loop, outside the lock) ---------------------------------------------
     def update(self, cycle: Cycle) -> None:
-        state, sample = cycle.state, cycle.reference
-        q_ref, qd_ref = sample.positions, sample.velocities
+        state = cycle.state
         # The controller's own factor (in the scaled one too, as upstream's publish_state reports it; the robot's
         # is the speed_scaling_state_broadcaster's).
         factor = self.core.speed_scaling
-        if self._state_cdr.listened():
-            self._state_cdr.publish(pack_state(q_ref, qd_ref, sample.accelerations, state.q, state.qd, cycle.effort,
-                                               factor, self._state_values), cycle.stamp_parts)
+        desired, output = self._desired, self._output
+        if output is not None and desired is not None and self._state_cdr.listened():
+            self._state_cdr.publish(pack_state(desired.positions, desired.velocities, desired.accelerations, state.q,
+                                               state.qd, output, factor, self._state_values), cycle.stamp_parts)
         token = self._token
-        if token is not None and cycle.index % self._feedback_every == 0:
-            self._link.send(Feedback(token, state.t, (sample.positions, sample.velocities, sample.accelerations),
-                                     (state.q, state.qd),
-                                     (sample.positions - state.q, sample.velocities - state.qd)))
+        if token is not None and desired is not None and cycle.index % self._feedback_every == 0:
+            # Upstream's feedback: desired in trajectory time, the error of the positions only (as controller_state).
+            self._link.send(Feedback(token, state.t, (desired.positions, desired.velocities, desired.accelerations),
+                                     (state.q, state.qd), (desired.positions - state.q, np.zeros_like(state.qd))))
 
     # ---- from the gateway (its receiving thread) -----------------------------------------------------------------
     def on_gateway(self, message: object) -> None:

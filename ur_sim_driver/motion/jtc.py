@@ -119,7 +119,9 @@ class TrajectoryController:
         self._tolerances: SegmentTolerances | None = None
         self._token: Hashable | None = None
         self._traj_time = 0.0
+        self._t_sample: float | None = None  # trajectory time of this cycle's sample (None while holding)
         self.last_sample: TrajectorySample | None = None
+        self.desired: TrajectorySample | None = None  # this cycle's sample in trajectory time (not scaled)
 
     @property
     def active_token(self) -> Hashable | None:
@@ -194,11 +196,12 @@ class TrajectoryController:
             # Holding, nothing moves or lags: the scaling's update for a reference at rest.
             self.scaling.update_at_rest(period)
             self.stop = self._hold
+            self._t_sample = None
             sample = raw
         else:
             # Sample at the current trajectory time, then advance it (as upstream): the reference for this
             # cycle is the trajectory at `now`, which the joint controller tracks at this instant.
-            t_sample = self._traj_time
+            t_sample = self._t_sample = self._traj_time
             raw = traj.sample(t_sample)
             last = len(traj.points.times) - 1
             self.stop = traj.points.positions[last] if raw.ended or raw.segment_index == last else None
@@ -216,7 +219,19 @@ class TrajectoryController:
             outcome = self._supervise(sample, t_sample - traj.end_time, q, qd)
             self._first_sample = False
         self.last_sample = sample
+        self.desired = raw
         return sample, outcome
+
+    def command_positions(self, update_period: float) -> np.ndarray:
+        """(n,) [rad] what upstream writes to the position command interfaces this cycle (``command_next_``): the
+        trajectory at this cycle's trajectory time plus one update period (not scaled), or the held position. Call
+        after :meth:`update`, under the same lock. The robot here tracks the trajectory itself through the period
+        (``desired`` at the cycle's start, with velocity and acceleration), which brings the arm to the same place
+        at the period's end as a robot that reaches the command then."""
+        traj = self._trajectory
+        if traj is None or self._t_sample is None:
+            return self._hold
+        return traj.sample(self._t_sample + update_period).positions
 
     def _supervise(self, sample: TrajectorySample, time_since_end: float, q: np.ndarray,
                    qd: np.ndarray) -> Outcome | None:
