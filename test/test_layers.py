@@ -6,6 +6,7 @@ Read from the source with ``ast`` (every import statement, also inside functions
 lazy import cannot hide an upward dependency. The order is the one ``ur_sim_driver/__init__.py`` documents.
 """
 import ast
+import re
 from pathlib import Path
 
 import pytest
@@ -13,7 +14,7 @@ import pytest
 import ur_glue_planner
 import ur_sim_driver
 
-ORDER = ('description', 'physics', 'robot', 'motion', 'gateway', 'controllers', 'ros')  # lowest first
+ORDER = ('description', 'physics', 'robot', 'motion', 'gateway', 'controllers', 'ports', 'ros')  # lowest first
 BASE = ('errors', 'paths', 'spin_thread')  # the modules at the top: importable by all, importing nothing of ours
 SHARED = ('description',)  # the layers ur_glue_planner may import, besides BASE
 ROOT = Path(ur_sim_driver.__file__).parent
@@ -73,10 +74,11 @@ def test_every_layer_says_what_lives_there_and_what_it_may_import():
         assert doc, f'ur_sim_driver/{layer}/__init__.py has no docstring'
         below = ORDER[:ORDER.index(layer)]
         said = doc[doc.index('May import'):] if 'May import' in doc else doc[doc.index('Imports nothing'):]
+        named = set(re.findall(r'\w+', said))  # words: 'ports' is not named by 'Imports'
         for other in below:
-            assert other in said, f'{layer}: its docstring does not say that it may import {other}'
+            assert other in named, f'{layer}: its docstring does not say that it may import {other}'
         for other in ORDER[ORDER.index(layer) + 1:]:
-            assert other not in said, f'{layer}: its docstring names {other}, a layer above it, as importable'
+            assert other not in named, f'{layer}: its docstring names {other}, a layer above it, as importable'
 
 
 @pytest.mark.parametrize('path', _modules(PLANNER), ids=lambda p: str(p.relative_to(PLANNER)))

@@ -160,3 +160,13 @@ def test_resend_robot_program_needs_headless_mode():
             h.sim.robot.stop()  # the program stopped on the robot (a user at the pendant)
         assert h.keeper.call('play').success
         wait_for(lambda: h.sim.robot.program_running, what='the External Control program playing')
+
+
+def test_unknown_parameters_are_named_and_grouped_ones_are_known():
+    from ur_sim_driver.robot.sim_config import PARAMETER_NAMES, unknown_parameters
+    known = ['ur_type', 'speed_scaling.initial_scaling_factor', 'dashboard_server.port', 'dashboard_server.host',
+             'constraints.goal_time', 'mounted_payload.mass', 'use_sim_time']
+    assert unknown_parameters(known) == []
+    assert unknown_parameters(['ur_tpye', 'dashboard.port', 'speed_scaling_initial_factor']) == [
+        'ur_tpye', 'dashboard.port', 'speed_scaling_initial_factor']
+    assert 'dashboard_server.*' in PARAMETER_NAMES and 'dashboard_server_port' not in PARAMETER_NAMES

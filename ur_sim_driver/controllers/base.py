@@ -27,6 +27,7 @@ from ur_sim_driver.motion.trajectory import TrajectorySample
 from ur_sim_driver.physics.physics import ArmState
 
 if TYPE_CHECKING:  # imported for annotations only: no import cycle with the node
+    from ur_sim_driver.robot.dashboard_server import DashboardServer
     from ur_sim_driver.robot.robot_state import RobotState
     from ur_sim_driver.robot.sim_config import SimConfig
     from ur_sim_driver.robot.simulator import Simulator
@@ -81,6 +82,8 @@ class Host:
         speed_scaling: the robot's own speed scaling (under `lock`).
         context: the rclpy context every component node lives in.
         robot_files: the robot's file system (flight reports, support files), a directory of this run.
+        dashboard: the robot's dashboard command interpreter, one for the ROS services and the TCP port (under
+            `lock`).
     """
 
     cfg: SimConfig
@@ -90,6 +93,7 @@ class Host:
     speed_scaling: RobotSpeedScaling
     context: object
     robot_files: Path | None = None
+    dashboard: DashboardServer | None = None
     # Conditions a service callback waits for, each with the event the loop sets once it holds (under `lock`).
     _waiters: list[tuple[Callable[[], bool], threading.Event]] = field(default_factory=list)
 

@@ -55,6 +55,9 @@ class SimConfig:
     initial_scaling_factor: float = 1.0
     real_time_factor: float = 1.0
     thread_priority: int = 50  # SCHED_FIFO priority of the real-time loop, as ros2_control_node's; 0: normal
+    # The robot's dashboard server on TCP (ports/dashboard_port.py): 29999 as on a UR; 0 lets the system choose.
+    dashboard_server_host: str = '127.0.0.1'
+    dashboard_server_port: int = 29999
     tool: str = 'none'
     scene: str = 'empty'
     base_pose: tuple[float, ...] = (0.0, 0.0, 0.0, 0.0, 0.0, 0.0)
@@ -105,6 +108,13 @@ def _number(name: str, value: Any, lo: float, hi: float, *, lo_open: bool = Fals
         bracket = '(' if lo_open else '['
         raise ConfigError(f"parameter '{name}' = {value!r} is outside the allowed range {bracket}{lo}, {hi}]")
     return x
+
+
+def _host(name: str, value: Any) -> str:
+    if not isinstance(value, str) or not value.strip() or any(c.isspace() for c in value):
+        raise ConfigError(f"parameter '{name}' = {value!r} must be a host name or address, e.g. '127.0.0.1' "
+                          "(this machine only) or '0.0.0.0' (every interface)")
+    return value
 
 
 def _integer(name: str, value: Any, lo: int, hi: int) -> int:
@@ -186,6 +196,9 @@ def sim_config_from_params(params: Mapping[str, Any]) -> SimConfig:
                                        0.0, math.inf),
         real_time_factor=_number('real_time_factor', get('real_time_factor', d.real_time_factor), 0.0, 100.0),
         thread_priority=_integer('thread_priority', get('thread_priority', d.thread_priority), 0, 99),
+        dashboard_server_host=_host('dashboard_server.host', get('dashboard_server.host', d.dashboard_server_host)),
+        dashboard_server_port=_integer('dashboard_server.port', get('dashboard_server.port', d.dashboard_server_port),
+                                       0, 65535),
         tool=_choice('tool', get('tool', d.tool), TOOLS),
         scene=_choice('scene', get('scene', d.scene), SCENES),
         base_pose=base_pose,
@@ -265,3 +278,16 @@ def _ros_name(parameter: str, value: Any) -> str:
         raise ConfigError(f"parameter '{parameter}' = {value!r} is not a valid ROS name "
                           '(letters, digits and underscores, not starting with a digit)')
     return name
+
+
+# Parameter names ur_sim reads: the configuration's fields, groups read as <group>.<name>, and rclpy's own.
+_GROUPS = ('constraints', 'speed_scaling', 'dashboard_server')
+_KNOWN = (set(SimConfig.__dataclass_fields__) - {'initial_scaling_factor', 'dashboard_server_host',
+                                                 'dashboard_server_port'}) | set(_GROUPS) | {
+    'use_sim_time', 'start_type_description_service'}
+PARAMETER_NAMES = ', '.join(sorted(f'{n}.*' if n in _GROUPS else n for n in _KNOWN))
+
+
+def unknown_parameters(names) -> list[str]:
+    """The names among `names` (flat, e.g. 'dashboard_server.port') that ur_sim does not read."""
+    return [n for n in names if n.split('.')[0] not in _KNOWN]

@@ -83,8 +83,7 @@ class DashboardClient(Component):
         self._connection = threading.Lock()
 
     def on_configure(self, host: Host, node: Node) -> None:
-        cfg = host.cfg
-        self.server = DashboardServer(host.robot, cfg.simulated_ur_type, cfg.software_version, host.robot_files)
+        self.server = host.dashboard  # the robot's own: the TCP port (ports/dashboard_port.py) answers from it too
         # The driver's dashboard client node parameter (set as `-p dashboard_client:autoconnect:=false`): without
         # it the client starts disconnected and waits for ~/connect.
         self.connected = bool(node.declare_parameter('autoconnect', True).value)

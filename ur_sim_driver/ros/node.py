@@ -53,10 +53,12 @@ from ur_sim_driver.motion import conversions as conv
 from ur_sim_driver.motion.jtc import TrajectoryController
 from ur_sim_driver.motion.tolerances import default_tolerances
 from ur_sim_driver.physics.physics import ArmState
+from ur_sim_driver.ports.dashboard_port import DashboardPort, PortError
+from ur_sim_driver.robot.dashboard_server import DashboardServer
 from ur_sim_driver.robot.encoders import reported_velocity
 from ur_sim_driver.robot.robot_state import NORMAL, RUNNING, RobotState
 from ur_sim_driver.robot.safety import ContactSafety, limit_cause
-from ur_sim_driver.robot.sim_config import SimConfig, sim_config_from_params
+from ur_sim_driver.robot.sim_config import PARAMETER_NAMES, SimConfig, sim_config_from_params, unknown_parameters
 from ur_sim_driver.robot.simulator import Simulator
 from ur_sim_driver.robot.speed_scaling import RobotSpeedScaling
 from ur_sim_driver.ros.dashboard import DashboardClient
@@ -130,8 +132,9 @@ class UrSimNode(Node):
         # The driver's controllers and nodes, one module each; the controller manager holds them.
         # The robot's file system for this run (the dashboard's flight reports and support files).
         self._robot_files = tempfile.TemporaryDirectory(prefix='ur_sim_robot_')
-        self.host = Host(self.cfg, self.sim, self._lock, self.robot, self.scaling, self.context,
-                         Path(self._robot_files.name))
+        files = Path(self._robot_files.name)
+        self.host = Host(self.cfg, self.sim, self._lock, self.robot, self.scaling, self.context, files,
+                         DashboardServer(self.robot, self.cfg.simulated_ur_type, self.cfg.software_version, files))
         feedback_every = round(self.sim.control_rate / self.cfg.action_monitor_rate)
         for name in trajectory_names:
             core = TrajectoryController(self.joints, self._defaults, self.sim.state().q, params.v_max,
@@ -171,6 +174,7 @@ class UrSimNode(Node):
         self.controller_manager.program_state_changed(self._refusal)
 
         self._init_messages()
+        self.dashboard_port = self._open_dashboard_port()
         self._thread = threading.Thread(target=self._run, name='ur_sim_loop', daemon=True)
         if start:
             self._thread.start()
@@ -182,11 +186,8 @@ class UrSimNode(Node):
 
     # ---- set-up ----------------------------------------------------------------------------------
     def _warn_unknown_parameters(self) -> None:
-        known = set(SimConfig.__dataclass_fields__) | {'use_sim_time', 'start_type_description_service'}
-        for name in self.get_parameters_by_prefix(''):
-            if name.split('.')[0] not in known and not name.startswith('constraints.'):
-                self.get_logger().warning(f"parameter '{name}' is not used by ur_sim; valid names: "
-                                          f"{', '.join(sorted(known - {'constraints'}))}, constraints.*")
+        for name in unknown_parameters(self.get_parameters_by_prefix('')):
+            self.get_logger().warning(f"parameter '{name}' is not used by ur_sim; valid names: {PARAMETER_NAMES}")
 
     def nodes(self) -> list[Node]:
         """This node, the controller manager's and every component's: an executor spinning ur_sim must spin all."""
@@ -359,6 +360,19 @@ class UrSimNode(Node):
         self._refusal = refusal
         self.controller_manager.program_state_changed(refusal)
 
+    def _open_dashboard_port(self) -> DashboardPort | None:
+        """The robot's dashboard server on TCP; None (and a warning) when its address cannot be used: the ROS side
+        runs on without it, as a second simulator on one machine must."""
+        cfg = self.cfg
+        try:
+            port = DashboardPort(cfg.dashboard_server_host, cfg.dashboard_server_port, self.host.dashboard,
+                                 self._lock, self.get_logger().info)
+        except PortError as exc:
+            self.get_logger().warning(f'{exc}; set dashboard_server.port (0: any free port) to serve it')
+            return None
+        self.get_logger().info('dashboard server listening on {}:{}'.format(*port.address))
+        return port
+
     def _publish(self, cycle: Cycle) -> None:
         if self._clock_cdr.listened():
             self._clock_cdr.publish((), cycle.stamp_parts)
@@ -368,6 +382,8 @@ class UrSimNode(Node):
         self._stop.set()
         if self._thread.is_alive():
             self._thread.join(timeout=5.0)
+        if self.dashboard_port is not None:
+            self.dashboard_port.close()
         self.gateway.close()
 
     def destroy_node(self) -> None:

@@ -1,0 +1,87 @@
+"""The dashboard server on its TCP port (29999 on a UR), in front of the robot's one command interpreter.
+
+A UR controller's dashboard server greets each connection with ``Connected: Universal Robots Dashboard Server``,
+then answers every command line with one line; ``quit`` answers ``Disconnected`` and closes the connection (as
+does ``shutdown``, after ``Shutting down``). Several clients may be connected at once, each answered in its own
+order. The answers come from :class:`~ur_sim_driver.robot.dashboard_server.DashboardServer`, the same instance the
+ROS ``/dashboard_client`` services use, so a popup opened over TCP, a program loaded through ROS or a user role set
+either way is one robot's state. Each command is handled under the simulation lock, as the services handle theirs.
+
+Lines end with ``\\n`` (a ``\\r`` before it is dropped); a line longer than ``MAX_LINE`` bytes closes the connection,
+so that a client that never sends a newline cannot hold memory.
+"""
+from __future__ import annotations
+
+import socket
+import socketserver
+import threading
+from collections.abc import Callable
+
+from ur_sim_driver.errors import UrSimError
+from ur_sim_driver.robot.dashboard_server import DashboardServer
+
+WELCOME = 'Connected: Universal Robots Dashboard Server'
+CLOSING = ('quit', 'shutdown')  # commands after whose answer the server closes the connection
+MAX_LINE = 64 * 1024  # [bytes]
+
+
+class PortError(UrSimError):
+    """A port could not be opened (address in use, not permitted, unknown host)."""
+
+
+class DashboardPort:
+    """The dashboard server listening on `host`:`port` (0: a free port chosen by the system).
+
+    Args:
+        server: the robot's command interpreter.
+        lock: the simulation lock, held while a command is handled.
+        log: called with a line for the log when a command is refused (the reason, which the answer does not give).
+    """
+
+    def __init__(self, host: str, port: int, server: DashboardServer, lock: threading.Lock,
+                 log: Callable[[str], None] = lambda _: None) -> None:
+        self._server, self._lock, self._log = server, lock, log
+        port_self = self
+
+        class Handler(socketserver.StreamRequestHandler):
+            def handle(self) -> None:
+                port_self._serve(self.connection, self.rfile)
+
+        try:
+            self._tcp = socketserver.ThreadingTCPServer((host, port), Handler, bind_and_activate=False)
+            self._tcp.daemon_threads = True  # a client still connected at shutdown does not hold the process
+            self._tcp.allow_reuse_address = True  # restart at once after a stop, as a robot's server comes back
+            self._tcp.server_bind()
+            self._tcp.server_activate()
+        except OSError as exc:
+            raise PortError(f'dashboard server: cannot listen on {host}:{port}: {exc.strerror or exc}') from None
+        self._thread = threading.Thread(target=self._tcp.serve_forever, kwargs={'poll_interval': 0.1},
+                                        name='dashboard_port', daemon=True)
+        self._thread.start()
+
+    @property
+    def address(self) -> tuple[str, int]:
+        """(host, port) listened on."""
+        host, port = self._tcp.server_address[:2]
+        return str(host), int(port)
+
+    def close(self) -> None:
+        """Stop listening and wait for the listening thread (connections still open end with the process)."""
+        self._tcp.shutdown()
+        self._tcp.server_close()
+        self._thread.join(timeout=5.0)
+
+    def _serve(self, connection: socket.socket, rfile) -> None:
+        connection.sendall((WELCOME + '\n').encode())
+        while True:
+            raw = rfile.readline(MAX_LINE + 1)
+            if not raw or (len(raw) > MAX_LINE and not raw.endswith(b'\n')):
+                return  # the client closed the connection, or sent an endless line
+            line = raw.decode('utf-8', errors='replace').rstrip('\n').rstrip('\r')
+            with self._lock:
+                reply = self._server.handle(line)
+            if reply.refusal:
+                self._log(f"dashboard port '{line}': {reply.answer} ({reply.refusal})")
+            connection.sendall((reply.answer + '\n').encode())
+            if ' '.join(line.lower().split()) in CLOSING:
+                return
