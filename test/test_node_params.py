@@ -165,7 +165,7 @@ def test_resend_robot_program_needs_headless_mode():
 def test_unknown_parameters_are_named_and_grouped_ones_are_known():
     from ur_sim_driver.robot.sim_config import PARAMETER_NAMES, unknown_parameters
     known = ['ur_type', 'speed_scaling.initial_scaling_factor', 'dashboard_server.port', 'dashboard_server.host',
-             'constraints.goal_time', 'mounted_payload.mass', 'use_sim_time']
+             'rtde.port', 'constraints.goal_time', 'mounted_payload.mass', 'use_sim_time']
     assert unknown_parameters(known) == []
     assert unknown_parameters(['ur_tpye', 'dashboard.port', 'speed_scaling_initial_factor']) == [
         'ur_tpye', 'dashboard.port', 'speed_scaling_initial_factor']

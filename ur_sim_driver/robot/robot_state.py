@@ -16,6 +16,8 @@ from __future__ import annotations
 import posixpath
 from dataclasses import dataclass
 
+from ur_sim_driver.robot.registers import Registers
+
 # ur_dashboard_msgs/RobotMode
 NO_CONTROLLER, DISCONNECTED, CONFIRM_SAFETY, BOOTING, POWER_OFF, POWER_ON, IDLE, BACKDRIVE, RUNNING = range(-1, 8)
 ROBOT_MODE_NAMES = {NO_CONTROLLER: 'NO_CONTROLLER', DISCONNECTED: 'DISCONNECTED', CONFIRM_SAFETY: 'CONFIRM_SAFETY',
@@ -68,6 +70,7 @@ class RobotState:
         self.stop_cause = ''
         self._pending: list[tuple[float, int]] = []  # (time [s], mode) steps of a transition under way
         self._now = 0.0
+        self.registers = Registers()  # the general purpose registers (RTDE, URScript)
 
     # ---- queries ------------------------------------------------------------------------------
     def status(self) -> RobotStatus:

@@ -58,6 +58,8 @@ class SimConfig:
     # The robot's dashboard server on TCP (ports/dashboard_port.py): 29999 as on a UR; 0 lets the system choose.
     dashboard_server_host: str = '127.0.0.1'
     dashboard_server_port: int = 29999
+    rtde_host: str = '127.0.0.1'  # RTDE (ports/rtde_port.py): 30004 as on a UR; 0 lets the system choose
+    rtde_port: int = 30004
     tool: str = 'none'
     scene: str = 'empty'
     base_pose: tuple[float, ...] = (0.0, 0.0, 0.0, 0.0, 0.0, 0.0)
@@ -199,6 +201,8 @@ def sim_config_from_params(params: Mapping[str, Any]) -> SimConfig:
         dashboard_server_host=_host('dashboard_server.host', get('dashboard_server.host', d.dashboard_server_host)),
         dashboard_server_port=_integer('dashboard_server.port', get('dashboard_server.port', d.dashboard_server_port),
                                        0, 65535),
+        rtde_host=_host('rtde.host', get('rtde.host', d.rtde_host)),
+        rtde_port=_integer('rtde.port', get('rtde.port', d.rtde_port), 0, 65535),
         tool=_choice('tool', get('tool', d.tool), TOOLS),
         scene=_choice('scene', get('scene', d.scene), SCENES),
         base_pose=base_pose,
@@ -281,9 +285,9 @@ def _ros_name(parameter: str, value: Any) -> str:
 
 
 # Parameter names ur_sim reads: the configuration's fields, groups read as <group>.<name>, and rclpy's own.
-_GROUPS = ('constraints', 'speed_scaling', 'dashboard_server')
+_GROUPS = ('constraints', 'speed_scaling', 'dashboard_server', 'rtde')
 _KNOWN = (set(SimConfig.__dataclass_fields__) - {'initial_scaling_factor', 'dashboard_server_host',
-                                                 'dashboard_server_port'}) | set(_GROUPS) | {
+                                                 'dashboard_server_port', 'rtde_host', 'rtde_port'}) | set(_GROUPS) | {
     'use_sim_time', 'start_type_description_service'}
 PARAMETER_NAMES = ', '.join(sorted(f'{n}.*' if n in _GROUPS else n for n in _KNOWN))
 

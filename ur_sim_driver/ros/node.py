@@ -54,6 +54,7 @@ from ur_sim_driver.motion.jtc import TrajectoryController
 from ur_sim_driver.motion.tolerances import default_tolerances
 from ur_sim_driver.physics.physics import ArmState
 from ur_sim_driver.ports.dashboard_port import DashboardPort, PortError
+from ur_sim_driver.ports.rtde_port import RtdePort
 from ur_sim_driver.robot.dashboard_server import DashboardServer
 from ur_sim_driver.robot.encoders import reported_velocity
 from ur_sim_driver.robot.robot_state import NORMAL, RUNNING, RobotState
@@ -174,7 +175,12 @@ class UrSimNode(Node):
         self.controller_manager.program_state_changed(self._refusal)
 
         self._init_messages()
-        self.dashboard_port = self._open_dashboard_port()
+        cfg = self.cfg
+        self.dashboard_port = self._open_port('dashboard server', 'dashboard_server.port', lambda: DashboardPort(
+            cfg.dashboard_server_host, cfg.dashboard_server_port, self.host.dashboard, self._lock,
+            self.get_logger().info))
+        self.rtde_port = self._open_port('RTDE', 'rtde.port', lambda: RtdePort(
+            cfg.rtde_host, cfg.rtde_port, self.host, self.sim.control_rate, self.get_logger().info))
         self._thread = threading.Thread(target=self._run, name='ur_sim_loop', daemon=True)
         if start:
             self._thread.start()
@@ -337,6 +343,8 @@ class UrSimNode(Node):
             if component.active:
                 component.update(cycle)
         self._publish(cycle)
+        if self.rtde_port is not None:
+            self.rtde_port.tick()
         if cause is not None:
             self.get_logger().error(f'PROTECTIVE_STOP: {cause}')
         self._cycle += 1
@@ -360,17 +368,15 @@ class UrSimNode(Node):
         self._refusal = refusal
         self.controller_manager.program_state_changed(refusal)
 
-    def _open_dashboard_port(self) -> DashboardPort | None:
-        """The robot's dashboard server on TCP; None (and a warning) when its address cannot be used: the ROS side
-        runs on without it, as a second simulator on one machine must."""
-        cfg = self.cfg
+    def _open_port(self, what: str, parameter: str, open_it):
+        """One of the robot's TCP ports (`open_it()`); None (and a warning) when its address cannot be used: the ROS
+        side runs on without it, as a second simulator on one machine must."""
         try:
-            port = DashboardPort(cfg.dashboard_server_host, cfg.dashboard_server_port, self.host.dashboard,
-                                 self._lock, self.get_logger().info)
+            port = open_it()
         except PortError as exc:
-            self.get_logger().warning(f'{exc}; set dashboard_server.port (0: any free port) to serve it')
+            self.get_logger().warning(f'{exc}; set {parameter} (0: any free port) to serve it')
             return None
-        self.get_logger().info('dashboard server listening on {}:{}'.format(*port.address))
+        self.get_logger().info('{} listening on {}:{}'.format(what, *port.address))
         return port
 
     def _publish(self, cycle: Cycle) -> None:
@@ -382,8 +388,9 @@ class UrSimNode(Node):
         self._stop.set()
         if self._thread.is_alive():
             self._thread.join(timeout=5.0)
-        if self.dashboard_port is not None:
-            self.dashboard_port.close()
+        for port in (self.dashboard_port, self.rtde_port):
+            if port is not None:
+                port.close()
         self.gateway.close()
 
     def destroy_node(self) -> None:

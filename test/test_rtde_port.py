@@ -1,0 +1,178 @@
+"""RTDE on its TCP port, spoken by a client written from the RTDE guide: protocol and version, output recipes
+streamed in simulated time with the robot's values, NOT_FOUND and IN_USE, inputs that change the robot (seen on
+the ROS side), pause."""
+from __future__ import annotations
+
+import json
+import os
+import socket
+import struct
+import subprocess
+import sys
+from pathlib import Path
+
+import numpy as np
+import pytest
+from scipy.spatial.transform import Rotation
+from sim_harness import running_sim, wait_for, wait_still
+
+from ur_glue_planner.motion.kinematics import Kinematics
+from ur_sim_driver.ports import rtde_protocol as rp
+
+TIMEOUT = 10.0  # [s] of wall time for an answer
+
+
+class RtdeClient:
+    """The client side of the protocol (big-endian: size, type, payload)."""
+
+    def __init__(self, address: tuple[str, int]) -> None:
+        self.sock = socket.create_connection(address, timeout=TIMEOUT)
+
+    def close(self) -> None:
+        self.sock.close()
+
+    def _read(self, n: int) -> bytes:
+        data = b''
+        while len(data) < n:
+            chunk = self.sock.recv(n - len(data))
+            assert chunk, 'the server closed the connection'
+            data += chunk
+        return data
+
+    def receive(self) -> tuple[int, bytes]:
+        size, kind = struct.unpack('>HB', self._read(3))
+        return kind, self._read(size - 3)
+
+    def request(self, kind: int, payload: bytes = b'') -> bytes:
+        self.sock.sendall(struct.pack('>HB', 3 + len(payload), kind) + payload)
+        while True:  # data packages of a started recipe may come first
+            got, answer = self.receive()
+            if got == kind:
+                return answer
+
+    def outputs(self, frequency: float, names: list[str]) -> tuple[int, list[str]]:
+        answer = self.request(ord('O'), struct.pack('>d', frequency) + ','.join(names).encode())
+        return answer[0], answer[1:].decode().split(',')
+
+    def inputs(self, names: list[str]) -> tuple[int, list[str]]:
+        answer = self.request(ord('I'), ','.join(names).encode())
+        return answer[0], answer[1:].decode().split(',')
+
+    def data(self) -> tuple[int, bytes]:
+        while True:
+            kind, payload = self.receive()
+            if kind == ord('U'):
+                return payload[0], payload[1:]
+
+
+def _unpack(types: list[str], payload: bytes) -> list:
+    fmt = rp.recipe_format(types)
+    return rp.regroup(fmt.unpack(payload[:fmt.size]), types)
+
+
+@pytest.fixture(scope='module')
+def h():
+    with running_sim() as harness:
+        yield harness
+
+
+def _cycles(h, n: int) -> None:
+    """Step the simulation `n` control cycles while a connection streams."""
+    start = h.sim.rtde_port.cycle
+    wait_for(lambda: h.sim.rtde_port.cycle >= start + n, what=f'{n} control cycles')
+
+
+def _connect(h) -> RtdeClient:
+    client = RtdeClient(h.sim.rtde_port.address)
+    assert client.request(ord('V'), struct.pack('>H', 2)) == b'\x01'
+    return client
+
+
+def test_version_and_an_output_recipe_streamed_in_simulated_time(h):
+    client = _connect(h)
+    try:
+        major, minor, bugfix, build = struct.unpack('>IIII', client.request(ord('v')))
+        assert (major, minor, bugfix, build) == tuple(h.sim.host.dashboard.version)
+        names = ['timestamp', 'actual_q', 'robot_mode', 'actual_digital_output_bits', 'speed_scaling']
+        recipe, types = client.outputs(125.0, names)
+        assert recipe == 1 and types == ['DOUBLE', 'VECTOR6D', 'INT32', 'UINT64', 'DOUBLE']
+        assert client.request(ord('S')) == b'\x01'
+        _cycles(h, 20)  # 5 periods of 125 Hz at 500 Hz
+        stamps = []
+        for _ in range(5):
+            got, payload = client.data()
+            assert got == 1
+            t, q, mode, outputs, scaling = _unpack(types, payload)
+            stamps.append(t)
+            assert np.allclose(q, h.q, atol=1e-3) and mode == 7 and scaling == pytest.approx(1.0)
+        assert np.allclose(np.diff(stamps), 0.008, atol=1e-9)  # every 4th cycle of 500 Hz, read in that cycle
+        assert client.request(ord('P')) == b'\x01'
+    finally:
+        client.close()
+
+
+def test_unknown_names_answer_not_found_and_a_held_input_in_use(h):
+    first, second = _connect(h), _connect(h)
+    try:
+        recipe, types = first.outputs(500.0, ['actual_q', 'no_such_variable', 'actual_current'])
+        assert recipe == 0 and types == ['VECTOR6D', 'NOT_FOUND', 'NOT_FOUND']  # currents are not simulated
+        recipe, types = first.outputs(1000.0, ['actual_q'])  # above the robot's 500 Hz
+        assert recipe == 0
+        assert first.inputs(['input_int_register_24'])[0] == 1
+        recipe, types = second.inputs(['input_int_register_24', 'input_int_register_25'])
+        assert recipe == 0 and types == ['IN_USE', 'INT32']
+        first.close()  # a closed connection lets go of its inputs
+        wait_still(lambda: second.inputs(['input_int_register_24'])[0] != 0, what='the register released')
+    finally:
+        first.close()
+        second.close()
+
+
+def test_inputs_change_the_robot_and_show_on_the_ros_side(h):
+    client = _connect(h)
+    try:
+        names = ['standard_digital_output_mask', 'standard_digital_output', 'input_double_register_3']
+        recipe, types = client.inputs(names)
+        assert recipe == 1 and types == ['UINT8', 'UINT8', 'DOUBLE']
+        out_recipe, out_types = client.outputs(500.0, ['actual_digital_output_bits', 'input_double_register_3'])
+        assert client.request(ord('S')) == b'\x01'
+        payload = struct.pack('>BBBd', recipe, 0b0000_0100, 0b0000_0100, 2.5)  # pin 2 on
+        client.sock.sendall(struct.pack('>HB', 3 + len(payload), ord('U')) + payload)
+        wait_still(lambda: h.sim.sim.io.digital_out[2], what='digital output 2 on')
+        streamed = h.sim.rtde_port.cycle
+        _cycles(h, 1)
+        while True:  # the packages of the cycles before the input are queued first
+            _, data = client.data()
+            bits, register = _unpack(out_types, data)
+            if bits & 0b100:
+                break
+        assert register == 2.5 and h.sim.rtde_port.cycle > streamed
+        payload = struct.pack('>BBBd', recipe, 0b0000_0100, 0, 0.0)  # pin 2 off again
+        client.sock.sendall(struct.pack('>HB', 3 + len(payload), ord('U')) + payload)
+        wait_still(lambda: not h.sim.sim.io.digital_out[2], what='digital output 2 off')
+    finally:
+        client.close()
+
+
+def test_a_ur_rtde_program_reads_the_robot_and_sets_an_output():
+    """ur_rtde (PyPI ur-rtde), as its users run it, against ur_sim's RTDE on 30004: on a loopback address of this
+    test process's own (ur_rtde has no port argument; ROS_DOMAIN_ID is unique per process), paced to the wall clock
+    that ur_rtde waits on."""
+    address = f'127.0.0.{10 + int(os.environ.get("ROS_DOMAIN_ID", "0")) % 240}'
+    with running_sim(rtde={'host': address, 'port': 30004}, paced=True) as h:
+        run = subprocess.run([sys.executable, str(Path(__file__).with_name('ur_rtde_client.py')), address],
+                             capture_output=True, text=True, timeout=120)
+        assert run.returncode == 0, run.stderr
+        read = json.loads(run.stdout.strip().splitlines()[-1])
+        assert read['connected'] and read['timestamp'] > 0.0 and read['set_output']
+        assert (read['robot_mode'], read['safety_mode'], read['runtime_state']) == (7, 1, 2)  # RUNNING, NORMAL, PLAYING
+        assert read['speed_scaling'] == pytest.approx(1.0)
+        q = np.array(read['q'])
+        assert np.allclose(q, h.q, atol=1e-4)  # the arm holds still
+        # The pose in the robot's base frame (ROS 'base'), checked against Pinocchio's FK of the URDF.
+        fk = {frame: Kinematics(h.sim.sim.urdf, h.joints, frame).fk(q) for frame in ('base', 'tool0')}
+        expected = np.linalg.inv(fk['base']) @ fk['tool0']
+        pose = np.array(read['tcp'])
+        assert np.allclose(pose[:3], expected[:3, 3], atol=1e-6)
+        assert np.allclose(Rotation.from_rotvec(pose[3:]).as_matrix(), expected[:3, :3], atol=1e-6)
+        wait_still(lambda: h.sim.sim.io.digital_out[3], what='digital output 3, set through RTDE')

@@ -1,0 +1,173 @@
+"""What each RTDE variable reads from and writes to the simulated robot.
+
+Output variables are read under the simulation lock, from the same objects the ROS side reads: the arm (joint
+state, servo setpoint, TCP pose, wrench, payload), the robot's modes and program state, the IO bank, the speed
+scaling and the registers. A variable the simulation cannot fill honestly (currents, voltages, temperatures, joint
+modes, Euromap67, ...) is answered ``NOT_FOUND`` at set-up, as the robot answers a name it does not know: a client
+learns at once what it does not get. Input variables change the robot as the driver's services do: an output set
+here shows on ``/io_and_status_controller/io_states``, and the other way round.
+
+Frames and units as the RTDE guide gives them: poses ``[x, y, z, rx, ry, rz]`` in the base frame (rotation
+vector), ``actual_TCP_force`` in the base frame about the TCP, joint values in rad, rad/s, rad/s^2 and N m. The TCP
+is the flange (tool0): the simulated robot's installation sets no TCP offset.
+"""
+from __future__ import annotations
+
+from collections.abc import Callable
+
+import numpy as np
+from scipy.spatial.transform import Rotation
+
+from ur_sim_driver.controllers.base import Host
+from ur_sim_driver.robot.encoders import reported_velocity
+from ur_sim_driver.robot.io_bank import CURRENT, N_ANALOG, VOLTAGE, analog_out_refusal
+from ur_sim_driver.robot.registers import bits_word, set_bits_word
+from ur_sim_driver.robot.robot_state import (
+    PAUSED,
+    PLAYING,
+    POWER_ON,
+    PROTECTIVE_STOP,
+    ROBOT_EMERGENCY_STOP,
+    SYSTEM_EMERGENCY_STOP,
+)
+from ur_sim_driver.robot.speed_scaling import SLIDER_MAX, SLIDER_MIN
+
+RUNTIME_STATE = {'STOPPED': 1, PLAYING: 2, PAUSED: 4}  # stopping 0, pausing 3, resuming 5: transitions are instant
+_STOPPED_BY_SAFETY = (PROTECTIVE_STOP, 5, SYSTEM_EMERGENCY_STOP, ROBOT_EMERGENCY_STOP, 8, 9)  # bit 10
+
+
+def _vec(a) -> tuple[float, ...]:
+    return tuple(float(x) for x in a)
+
+
+def _bits(levels) -> int:
+    return sum(1 << k for k, on in enumerate(levels) if on)
+
+
+def _pose(host: Host) -> tuple[float, ...]:
+    position, quat = host.sim.tcp_pose()
+    return _vec(np.concatenate((position, Rotation.from_quat(quat).as_rotvec())))
+
+
+def _force(host: Host) -> tuple[float, ...]:
+    """The flange's wrench (tool0 axes, ``Simulator.wrench``) in base axes, about the TCP."""
+    r = Rotation.from_quat(host.sim.tcp_pose()[1]).as_matrix()
+    w = host.sim.wrench()
+    return _vec(np.concatenate((r @ w[:3], r @ w[3:])))
+
+
+def _target(host: Host, k: int) -> tuple[float, ...]:
+    setpoint = host.sim.last_setpoint
+    if setpoint is None:  # freedrive, or before the first cycle: the arm's own state
+        state = host.sim.state()
+        return _vec((state.q, state.qd, np.zeros_like(state.q))[k])
+    return _vec((setpoint.positions, setpoint.velocities, setpoint.accelerations)[k])
+
+
+def _safety_bits(mode: int) -> int:
+    bits = 1 << (mode - 1) if 1 <= mode <= 9 else 0
+    if mode in (SYSTEM_EMERGENCY_STOP, ROBOT_EMERGENCY_STOP):
+        bits |= 1 << 7  # emergency stopped
+    if mode in _STOPPED_BY_SAFETY:
+        bits |= 1 << 10
+    return bits
+
+
+def _register_readers() -> dict[str, Callable[[Host], object]]:
+    out: dict[str, Callable[[Host], object]] = {}
+    for side in ('input', 'output'):
+        for k in range(48):
+            out[f'{side}_int_register_{k}'] = lambda h, s=side, k=k: getattr(h.robot.registers, f'{s}_ints')[k]
+            out[f'{side}_double_register_{k}'] = lambda h, s=side, k=k: getattr(h.robot.registers, f'{s}_doubles')[k]
+        for k in range(64, 128):
+            out[f'{side}_bit_register_{k}'] = lambda h, s=side, k=k: getattr(h.robot.registers, f'{s}_bits')[k]
+        for first in (0, 32):
+            out[f'{side}_bit_registers{first}_to_{first + 31}'] = \
+                lambda h, s=side, f=first: bits_word(getattr(h.robot.registers, f'{s}_bits'), f)
+    return out
+
+
+#: Output variable -> its value now (call under the simulation lock).
+READERS: dict[str, Callable[[Host], object]] = {
+    'timestamp': lambda h: h.sim.time,
+    'target_q': lambda h: _target(h, 0), 'target_qd': lambda h: _target(h, 1), 'target_qdd': lambda h: _target(h, 2),
+    'target_moment': lambda h: _vec(h.sim.state().effort),
+    'actual_q': lambda h: _vec(h.sim.state().q),
+    'actual_qd': lambda h: _vec(reported_velocity(h.sim.state().qd, h.sim.control_dt)),
+    'actual_TCP_pose': _pose, 'actual_TCP_force': _force, 'tcp_offset': lambda h: (0.0,) * 6,
+    'speed_scaling': lambda h: h.speed_scaling.factor, 'target_speed_fraction': lambda h: h.speed_scaling.slider,
+    'robot_mode': lambda h: h.robot.robot_mode, 'safety_mode': lambda h: h.robot.safety_mode,
+    'safety_status': lambda h: h.robot.safety_mode,
+    'runtime_state': lambda h: RUNTIME_STATE.get(h.robot.program_state, 1),
+    'robot_status_bits': lambda h: int(h.robot.robot_mode >= POWER_ON) | int(h.robot.program_running) << 1,
+    'safety_status_bits': lambda h: _safety_bits(h.robot.safety_mode),
+    'actual_digital_input_bits': lambda h: _bits(h.sim.io.digital_in),
+    'actual_digital_output_bits': lambda h: _bits(h.sim.io.digital_out),
+    'standard_analog_input0': lambda h: h.sim.io.analog_in[0],
+    'standard_analog_input1': lambda h: h.sim.io.analog_in[1],
+    'standard_analog_output0': lambda h: h.sim.io.analog_out[0],
+    'standard_analog_output1': lambda h: h.sim.io.analog_out[1],
+    'analog_io_types': lambda h: (_bits(d == VOLTAGE for d in h.sim.io.analog_in_domain)
+                                  | _bits(d == VOLTAGE for d in h.sim.io.analog_out_domain) << 2),
+    'tool_analog_input0': lambda h: h.sim.io.tool_analog_in[0],
+    'tool_analog_input1': lambda h: h.sim.io.tool_analog_in[1],
+    'tool_analog_input_types': lambda h: _bits(d == VOLTAGE for d in h.sim.io.tool_analog_in_range),
+    'tool_output_voltage': lambda h: h.sim.io.tool_voltage,
+    'payload': lambda h: h.sim.payload.mass, 'payload_cog': lambda h: _vec(h.sim.payload.cog),
+    'payload_inertia': lambda h: _vec(h.sim.payload.inertia),
+    'script_control_line': lambda h: 0,
+    **_register_readers(),
+}
+
+#: Input variables a client may write (the others of the protocol's input list answer NOT_FOUND).
+WRITABLE = frozenset({
+    'speed_slider_mask', 'speed_slider_fraction', 'standard_digital_output_mask', 'standard_digital_output',
+    'configurable_digital_output_mask', 'configurable_digital_output', 'tool_digital_output_mask',
+    'tool_digital_output', 'standard_analog_output_mask', 'standard_analog_output_type', 'standard_analog_output_0',
+    'standard_analog_output_1', 'input_bit_registers0_to_31', 'input_bit_registers32_to_63',
+    *(f'input_bit_register_{k}' for k in range(64, 128)), *(f'input_int_register_{k}' for k in range(48)),
+    *(f'input_double_register_{k}' for k in range(48)),
+})
+
+
+def write(host: Host, values: dict[str, object]) -> list[str]:
+    """Apply one input data package (variable -> value) under the simulation lock; what was refused, as messages
+    naming the variable, the value and the limit (the rest is applied)."""
+    refused: list[str] = []
+    io = host.sim.io
+    for name, first, count in (('standard_digital_output', 0, 8), ('configurable_digital_output', 8, 8),
+                               ('tool_digital_output', 16, 2)):
+        if name in values:
+            mask = int(values.get(f'{name}_mask', 0xFF))
+            for k in range(count):
+                if mask >> k & 1:
+                    io = io.with_digital_out(first + k, float(int(values[name]) >> k & 1))
+    if 'standard_analog_output_mask' in values:
+        mask, kinds = int(values['standard_analog_output_mask']), int(values.get('standard_analog_output_type', 0))
+        for k in range(N_ANALOG):
+            name = f'standard_analog_output_{k}'
+            if mask >> k & 1 and name in values:
+                domain = VOLTAGE if kinds >> k & 1 else CURRENT
+                refusal = analog_out_refusal(k, float(values[name]), domain)
+                if refusal:
+                    refused.append(f'{name} = {values[name]}: {refusal}')
+                else:
+                    io = io.with_analog_out(k, float(values[name]), domain)
+    host.sim.io = io
+    if int(values.get('speed_slider_mask', 0)) & 1 and 'speed_slider_fraction' in values:
+        f = float(values['speed_slider_fraction'])
+        if SLIDER_MIN <= f <= SLIDER_MAX:
+            host.speed_scaling.slider = f
+        else:
+            refused.append(f'speed_slider_fraction = {f} is outside [{SLIDER_MIN}, {SLIDER_MAX}]')
+    registers = host.robot.registers
+    for name, value in values.items():
+        if name.startswith('input_int_register_'):
+            registers.input_ints[int(name.rsplit('_', 1)[1])] = int(value)
+        elif name.startswith('input_double_register_'):
+            registers.input_doubles[int(name.rsplit('_', 1)[1])] = float(value)
+        elif name.startswith('input_bit_register_'):
+            registers.input_bits[int(name.rsplit('_', 1)[1])] = bool(value)
+        elif name.startswith('input_bit_registers'):
+            set_bits_word(registers.input_bits, 0 if name.endswith('0_to_31') else 32, int(value))
+    return refused
