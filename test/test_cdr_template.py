@@ -139,3 +139,20 @@ def test_a_topic_is_sent_only_while_a_subscription_is_matched() -> None:
             assert received == [2.5]
             sub_node.destroy_subscription(subscription)
             spin_until(executor, lambda: not template.listened(), 30.0, 'the subscription unmatched')
+
+
+def test_a_pair_per_stamp_and_negative_durations():
+    """Each Time or Duration field its own (sec, nanosec); a negative Duration (before a trajectory's start) keeps its
+    int32 sec."""
+    from ur_sim_driver.motion import conversions as conv
+    proto = JointTrajectoryControllerState(joint_names=NAMES)
+    proto.reference.positions = [0.0] * 6
+    template = CdrTemplate(proto, stamps=('header.stamp', 'reference.time_from_start', 'feedback.time_from_start'),
+                           floats=('reference.positions',))
+    values = np.linspace(-1.0, 1.0, 6)
+    stamps = (12, 500, *conv.duration_parts(-0.3), *conv.duration_parts(2.25))
+    msg = deserialize_message(template.render(values, stamps), JointTrajectoryControllerState)
+    assert (msg.header.stamp.sec, msg.header.stamp.nanosec) == (12, 500)
+    assert (msg.reference.time_from_start.sec, msg.reference.time_from_start.nanosec) == (-1, 700_000_000)
+    assert conv.duration_to_sec(msg.feedback.time_from_start) == pytest.approx(2.25)
+    assert list(msg.reference.positions) == pytest.approx(values.tolist())

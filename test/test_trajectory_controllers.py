@@ -187,3 +187,10 @@ def test_controller_state_is_filled_as_upstream_fills_it(robot):
         assert list(m.error.velocities) == [0.0] * 6 and len(m.feedback.velocities) == 6
         assert len(m.output.velocities) == 0 and len(m.output.effort) == 0
         assert m.error.positions[0] == pytest.approx(m.reference.positions[0] - m.feedback.positions[0], abs=1e-12)
+        # reference.time_from_start is trajectory time: the linear move's position follows it exactly
+        t_reference = conv.duration_to_sec(m.reference.time_from_start)
+        assert m.reference.positions[0] - q0[0] == pytest.approx(0.1 * t_reference, abs=1e-6)
+    # feedback.time_from_start is time since the start (one period a message), the reference's half of it (slider)
+    t_feedback = np.array([conv.duration_to_sec(m.feedback.time_from_start) for m in moving])
+    t_reference = np.array([conv.duration_to_sec(m.reference.time_from_start) for m in moving])
+    assert np.allclose(np.diff(t_feedback), dt, atol=1e-9) and np.allclose(np.diff(t_reference), 0.5 * dt, atol=1e-9)

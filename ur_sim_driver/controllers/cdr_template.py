@@ -124,9 +124,10 @@ class CdrTemplate:
         self._publish_raw = raw_publish(publisher) if publisher is not None else None
         self.listened = listened(publisher) if publisher is not None else (lambda: False)
 
-    def render(self, values: np.ndarray | Sequence[float], stamp: tuple[int, int] | None = None) -> bytes:
+    def render(self, values: np.ndarray | Sequence[float], stamp: tuple[int, ...] | None = None) -> bytes:
         """The message's bytes with `values` (the float fields flattened, in order) and every stamp set to `stamp`
-        (sec, nanosec); a stamp not given keeps its last value."""
+        (sec, nanosec), or each to its own pair when `stamp` has one per stamp path (Time or Duration fields); a stamp
+        not given keeps its last value."""
         self._patch(values, stamp)
         return bytes(self._buffer)
 
@@ -141,7 +142,10 @@ class CdrTemplate:
         if self.size:
             self._doubles[self._double_index] = values
         if stamp is not None and self.stamp_count:
-            self._words[self._word_index] = stamp * self.stamp_count
+            # One (sec, nanosec) for every stamp, or a pair each in the order of `stamps`; a negative Duration's
+            # int32 sec goes into its unsigned word as two's complement.
+            words = stamp if len(stamp) == 2 * self.stamp_count else stamp * self.stamp_count
+            self._words[self._word_index] = [w & 0xFFFFFFFF for w in words] if min(words) < 0 else words
 
 
 def listened(publisher: Publisher) -> Callable[[], bool]:

@@ -82,6 +82,7 @@ class JointTrajectoryControllerComponent(JointCommandController):
         self.speed_scaling_received = 0  # speed_scaling_input messages handled
         self._desired: TrajectorySample | None = None  # this cycle's sample in trajectory time (under the lock)
         self._output: np.ndarray | None = None  # this cycle's position command, while controller_state is listened
+        self._times = (0.0, 0.0)  # this cycle's reference and feedback time_from_start [s]
 
     def interfaces(self, cfg: SimConfig) -> tuple[tuple[str, ...], tuple[str, ...]]:
         joints = prefixed_joints(cfg.joints, cfg.tf_prefix)
@@ -107,7 +108,8 @@ class JointTrajectoryControllerComponent(JointCommandController):
         for point, fields in STATE_FIELDS:
             for field in fields:
                 setattr(getattr(state, point), field, zeros)
-        self._state_cdr = CdrTemplate(state, stamps=('header.stamp',), floats=(
+        self._state_cdr = CdrTemplate(state, stamps=('header.stamp', 'reference.time_from_start',
+                                                     'feedback.time_from_start'), floats=(
             *(f'{point}.{field}' for point, fields in STATE_FIELDS for field in fields), 'speed_scaling_factor'),
             publisher=self._pub_state)
         self._state_values = np.empty(STATE_ARRAYS * len(self.core.joint_names) + 1)  # reused: publish copies it
@@ -143,6 +145,7 @@ class JointTrajectoryControllerComponent(JointCommandController):
         # controller_state's reference and output, read under the lock (a new trajectory may start outside it);
         # the output costs a second sample, taken only while someone subscribes.
         self._desired = self.core.desired
+        self._times = self.core.time_from_start
         self._output = self.core.command_positions(period) if self._state_cdr.listened() else None
         return sample, self.core.stop
 
@@ -161,15 +164,17 @@ class JointTrajectoryControllerComponent(JointCommandController):
         # The controller's own factor (in the scaled one too, as upstream's publish_state reports it; the robot's
         # is the speed_scaling_state_broadcaster's).
         factor = self.core.speed_scaling
-        desired, output = self._desired, self._output
+        desired, output, (t_reference, t_feedback) = self._desired, self._output, self._times
         if output is not None and desired is not None and self._state_cdr.listened():
+            stamps = cycle.stamp_parts + conv.duration_parts(t_reference) + conv.duration_parts(t_feedback)
             self._state_cdr.publish(pack_state(desired.positions, desired.velocities, desired.accelerations, state.q,
-                                               state.qd, output, factor, self._state_values), cycle.stamp_parts)
+                                               state.qd, output, factor, self._state_values), stamps)
         token = self._token
         if token is not None and desired is not None and cycle.index % self._feedback_every == 0:
             # Upstream's feedback: desired in trajectory time, the error of the positions only (as controller_state).
             self._link.send(Feedback(token, state.t, (desired.positions, desired.velocities, desired.accelerations),
-                                     (state.q, state.qd), (desired.positions - state.q, np.zeros_like(state.qd))))
+                                     (state.q, state.qd), (desired.positions - state.q, np.zeros_like(state.qd)),
+                                     t_reference, t_feedback))
 
     # ---- from the gateway (its receiving thread) -----------------------------------------------------------------
     def on_gateway(self, message: object) -> None:

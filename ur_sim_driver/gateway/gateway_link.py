@@ -149,6 +149,8 @@ class Feedback:
     desired: tuple[np.ndarray, np.ndarray, np.ndarray]
     actual: tuple[np.ndarray, np.ndarray]
     error: tuple[np.ndarray, np.ndarray]
+    desired_time: float = 0.0  # [s] desired.time_from_start: trajectory time since the trajectory's start
+    actual_time: float = 0.0  # [s] actual.time_from_start: time since the trajectory's start
 
 
 STOP = 'stop'  # sent last: the gateway ends its goals and exits

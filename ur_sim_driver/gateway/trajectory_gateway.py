@@ -308,7 +308,9 @@ class TrajectoryGateway:
             fb.header.stamp = conv.sec_to_time(message.t)
             fb.joint_names = list(self.cfg.joints)
             fb.desired = conv.trajectory_point(*message.desired)
+            fb.desired.time_from_start = conv.sec_to_duration(message.desired_time)
             fb.actual = conv.trajectory_point(*message.actual)
+            fb.actual.time_from_start = conv.sec_to_duration(message.actual_time)
             fb.error = conv.trajectory_point(*message.error)
             try:
                 handle.publish_feedback(fb)

@@ -32,6 +32,18 @@ def time_parts(t: float) -> tuple[int, int]:
     return divmod(max(0, round(t * 1e9)), 1_000_000_000)
 
 
+def duration_parts(t: float) -> tuple[int, int]:
+    """[s] -> (sec, nanosec) of a builtin_interfaces/Duration, which may be negative: sec rounds down, nanosec is in
+    [0, 1e9) (-0.3 s is sec -1, nanosec 700000000)."""
+    return divmod(round(t * 1e9), 1_000_000_000)
+
+
+def sec_to_duration(t: float) -> Duration:
+    """[s] -> builtin_interfaces/Duration (negative allowed)."""
+    sec, nanosec = duration_parts(t)
+    return Duration(sec=sec, nanosec=nanosec)
+
+
 def trajectory_command(msg: JointTrajectory) -> TrajectoryCommand:
     """A JointTrajectory as received, for validation (ragged arrays are kept as they are)."""
     points = tuple(

@@ -122,6 +122,11 @@ class TrajectoryController:
         self._t_sample: float | None = None  # trajectory time of this cycle's sample (None while holding)
         self.last_sample: TrajectorySample | None = None
         self.desired: TrajectorySample | None = None  # this cycle's sample in trajectory time (not scaled)
+        # (reference, feedback) time_from_start [s] of this cycle, as upstream's controller_state has them: trajectory
+        # time and time since the trajectory's start. Holding is upstream's one-point hold trajectory from then on.
+        self.time_from_start = (0.0, 0.0)
+        self._hold_since: float | None = None  # [s] when the current hold started (None: not holding yet)
+        self._hold_time = 0.0  # [s] trajectory time of the hold
 
     @property
     def active_token(self) -> Hashable | None:
@@ -175,6 +180,7 @@ class TrajectoryController:
         self._trajectory = None
         self._token = None
         self._hold = np.array(q, dtype=float)
+        self._hold_since = None
 
     def update(self, now: float, period: float, q: np.ndarray, qd: np.ndarray) -> tuple[TrajectorySample,
                                                                                          Outcome | None]:
@@ -197,12 +203,18 @@ class TrajectoryController:
             self.scaling.update_at_rest(period)
             self.stop = self._hold
             self._t_sample = None
+            if self._hold_since is None:
+                self._hold_since, self._hold_time = now, 0.0
+            else:
+                self._hold_time += period * (self.scaling.factor if self.scaled else self.speed_scaling)
+            self.time_from_start = (self._hold_time, now - self._hold_since)
             sample = raw
         else:
             # Sample at the current trajectory time, then advance it (as upstream): the reference for this
             # cycle is the trajectory at `now`, which the joint controller tracks at this instant.
             t_sample = self._t_sample = self._traj_time
             raw = traj.sample(t_sample)
+            self.time_from_start = (t_sample - traj.start_time, now - traj.start_time)
             last = len(traj.points.times) - 1
             self.stop = traj.points.positions[last] if raw.ended or raw.segment_index == last else None
             # The robot's factor read this cycle is the one of the previous cycle (the driver reads it with the
