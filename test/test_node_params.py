@@ -4,6 +4,7 @@ import subprocess
 import sys
 import threading
 
+import numpy as np
 import pytest
 from rclpy.parameter import Parameter
 from ros_helpers import ros_context
@@ -170,3 +171,26 @@ def test_unknown_parameters_are_named_and_grouped_ones_are_known():
     assert unknown_parameters(['ur_tpye', 'dashboard.port', 'speed_scaling_initial_factor']) == [
         'ur_tpye', 'dashboard.port', 'speed_scaling_initial_factor']
     assert 'dashboard_server.*' in PARAMETER_NAMES and 'dashboard_server_port' not in PARAMETER_NAMES
+
+
+def test_the_default_start_is_the_descriptions_initial_pose_running():
+    """The arm starts where ur_description's config/initial_positions.yaml puts the driver's mock hardware (0, -1.57,
+    0, -1.57, 0, 0), RUNNING and NORMAL with External Control playing (start_powered_off: as URSim boots, powered off
+    with the program stopped)."""
+    from ur_sim_driver.robot.robot_state import NORMAL, PLAYING, POWER_OFF, RUNNING, STOPPED
+    with ros_context() as ctx:
+        node = UrSimNode(context=ctx, start=False)
+        try:
+            assert np.allclose(node.sim.state().q, [0.0, -1.57, 0.0, -1.57, 0.0, 0.0], atol=1e-9)
+            assert (node.robot.robot_mode, node.robot.safety_mode, node.robot.program_state) == (RUNNING, NORMAL,
+                                                                                               PLAYING)
+        finally:
+            node.shutdown()
+            node.destroy_node()
+    with ros_context() as ctx:
+        node = UrSimNode(context=ctx, start=False, parameter_overrides=[Parameter('start_powered_off', value=True)])
+        try:
+            assert (node.robot.robot_mode, node.robot.program_state) == (POWER_OFF, STOPPED)
+        finally:
+            node.shutdown()
+            node.destroy_node()
