@@ -13,20 +13,15 @@ so that a client that never sends a newline cannot hold memory.
 from __future__ import annotations
 
 import socket
-import socketserver
 import threading
 from collections.abc import Callable
 
-from ur_sim_driver.errors import UrSimError
+from ur_sim_driver.ports.tcp_port import TcpPort
 from ur_sim_driver.robot.dashboard_server import DashboardServer
 
 WELCOME = 'Connected: Universal Robots Dashboard Server'
 CLOSING = ('quit', 'shutdown')  # commands after whose answer the server closes the connection
 MAX_LINE = 64 * 1024  # [bytes]
-
-
-class PortError(UrSimError):
-    """A port could not be opened (address in use, not permitted, unknown host)."""
 
 
 class DashboardPort:
@@ -36,42 +31,29 @@ class DashboardPort:
         server: the robot's command interpreter.
         lock: the simulation lock, held while a command is handled.
         log: called with a line for the log when a command is refused (the reason, which the answer does not give).
+
+    Raises:
+        PortError: the address cannot be listened on.
     """
 
     def __init__(self, host: str, port: int, server: DashboardServer, lock: threading.Lock,
                  log: Callable[[str], None] = lambda _: None) -> None:
         self._server, self._lock, self._log = server, lock, log
-        port_self = self
-
-        class Handler(socketserver.StreamRequestHandler):
-            def handle(self) -> None:
-                port_self._serve(self.connection, self.rfile)
-
-        try:
-            self._tcp = socketserver.ThreadingTCPServer((host, port), Handler, bind_and_activate=False)
-            self._tcp.daemon_threads = True  # a client still connected at shutdown does not hold the process
-            self._tcp.allow_reuse_address = True  # restart at once after a stop, as a robot's server comes back
-            self._tcp.server_bind()
-            self._tcp.server_activate()
-        except OSError as exc:
-            raise PortError(f'dashboard server: cannot listen on {host}:{port}: {exc.strerror or exc}') from None
-        self._thread = threading.Thread(target=self._tcp.serve_forever, kwargs={'poll_interval': 0.1},
-                                        name='dashboard_port', daemon=True)
-        self._thread.start()
+        self._port = TcpPort('dashboard server', host, port, self._serve)
 
     @property
     def address(self) -> tuple[str, int]:
         """(host, port) listened on."""
-        host, port = self._tcp.server_address[:2]
-        return str(host), int(port)
+        return self._port.address
 
     def close(self) -> None:
-        """Stop listening and wait for the listening thread (connections still open end with the process)."""
-        self._tcp.shutdown()
-        self._tcp.server_close()
-        self._thread.join(timeout=5.0)
+        self._port.close()
 
-    def _serve(self, connection: socket.socket, rfile) -> None:
+    def _serve(self, connection: socket.socket) -> None:
+        with connection.makefile('rb') as rfile:
+            self._lines(connection, rfile)
+
+    def _lines(self, connection: socket.socket, rfile) -> None:
         connection.sendall((WELCOME + '\n').encode())
         while True:
             raw = rfile.readline(MAX_LINE + 1)

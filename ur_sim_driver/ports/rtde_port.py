@@ -20,7 +20,6 @@ from __future__ import annotations
 
 import collections
 import socket
-import socketserver
 import struct
 import threading
 from collections.abc import Callable
@@ -28,8 +27,8 @@ from dataclasses import dataclass
 
 from ur_sim_driver.controllers.base import Host
 from ur_sim_driver.ports import rtde_protocol as rp
-from ur_sim_driver.ports.dashboard_port import PortError
 from ur_sim_driver.ports.rtde_fields import READERS, WRITABLE, write
+from ur_sim_driver.ports.tcp_port import TcpPort
 
 BACKLOG = 1000  # packages queued per connection
 
@@ -67,28 +66,11 @@ class RtdePort:
         self._sessions: list[_Session] = []  # started ones (replaced, never changed: the loop reads it unlocked)
         self._sessions_lock = threading.Lock()
         self._cycle = 0
-        owner = self
-
-        class Handler(socketserver.BaseRequestHandler):
-            def handle(self) -> None:
-                _Session(owner, self.request).run()
-
-        try:
-            self._tcp = socketserver.ThreadingTCPServer((address, port), Handler, bind_and_activate=False)
-            self._tcp.daemon_threads = True
-            self._tcp.allow_reuse_address = True
-            self._tcp.server_bind()
-            self._tcp.server_activate()
-        except OSError as exc:
-            raise PortError(f'RTDE: cannot listen on {address}:{port}: {exc.strerror or exc}') from None
-        self._thread = threading.Thread(target=self._tcp.serve_forever, kwargs={'poll_interval': 0.1},
-                                        name='rtde_port', daemon=True)
-        self._thread.start()
+        self._port = TcpPort('RTDE', address, port, lambda sock: _Session(self, sock).run())
 
     @property
     def address(self) -> tuple[str, int]:
-        host, port = self._tcp.server_address[:2]
-        return str(host), int(port)
+        return self._port.address
 
     def tick(self) -> None:
         """After a control cycle (simulation loop, outside the lock): the recipes due now are read and queued."""
@@ -129,9 +111,7 @@ class RtdePort:
                 del self._claims[name]
 
     def close(self) -> None:
-        self._tcp.shutdown()
-        self._tcp.server_close()
-        self._thread.join(timeout=5.0)
+        self._port.close()
 
 
 class _Session:

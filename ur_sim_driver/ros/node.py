@@ -53,8 +53,9 @@ from ur_sim_driver.motion import conversions as conv
 from ur_sim_driver.motion.jtc import TrajectoryController
 from ur_sim_driver.motion.tolerances import default_tolerances
 from ur_sim_driver.physics.physics import ArmState
-from ur_sim_driver.ports.dashboard_port import DashboardPort, PortError
+from ur_sim_driver.ports.dashboard_port import DashboardPort
 from ur_sim_driver.ports.rtde_port import RtdePort
+from ur_sim_driver.ports.tcp_port import PortError
 from ur_sim_driver.robot.dashboard_server import DashboardServer
 from ur_sim_driver.robot.encoders import reported_velocity
 from ur_sim_driver.robot.robot_state import NORMAL, RUNNING, RobotState
