@@ -14,7 +14,7 @@ from pathlib import Path
 import numpy as np
 import pytest
 from scipy.spatial.transform import Rotation
-from sim_harness import running_sim, wait_for, wait_still
+from sim_harness import point, running_sim, wait_for, wait_still
 
 from ur_glue_planner.motion.kinematics import Kinematics
 from ur_sim_driver.ports import rtde_protocol as rp
@@ -109,6 +109,34 @@ def test_version_and_an_output_recipe_streamed_in_simulated_time(h):
         assert client.request(ord('P')) == b'\x01'
     finally:
         client.close()
+
+
+def test_the_tcp_speed_is_the_rate_of_the_tcp_pose(h):
+    """actual_TCP_speed (linear [m/s], angular [rad/s], base axes) against the change of actual_TCP_pose over the
+    step before it, at 500 Hz during a move of every joint (MuJoCo's semi-implicit Euler moves the arm in a step by
+    the velocity at the step's end)."""
+    client = _connect(h)
+    try:
+        names = ['timestamp', 'actual_TCP_pose', 'actual_TCP_speed']
+        recipe, types = client.outputs(500.0, names)
+        assert recipe == 1
+        handle = h.send(h.goal([point(h.q + np.array([0.3, -0.2, 0.25, 0.3, -0.3, 0.4]), 1.0, [0.0] * 6)]))
+        assert handle.accepted
+        assert client.request(ord('S')) == b'\x01'
+        _cycles(h, 200)  # 0.4 s of the 1 s move
+        rows = [_unpack(types, client.data()[1]) for _ in range(200)]
+        assert client.request(ord('P')) == b'\x01'
+        h.result(handle)
+    finally:
+        client.close()
+    t = np.array([r[0] for r in rows])
+    pose, speed = np.array([r[1] for r in rows]), np.array([r[2] for r in rows])
+    assert np.allclose(np.diff(t), 0.002, atol=1e-9)
+    linear = (pose[1:, :3] - pose[:-1, :3]) / 0.002
+    rotations = Rotation.from_rotvec(pose[:, 3:])
+    angular = (rotations[1:] * rotations[:-1].inv()).as_rotvec() / 0.002  # base axes
+    assert np.abs(speed[1:, :3]).max() > 0.05 and np.abs(speed[1:, 3:]).max() > 0.5  # it moves
+    assert np.allclose(speed[1:, :3], linear, atol=1e-3) and np.allclose(speed[1:, 3:], angular, atol=1e-3)
 
 
 def test_unknown_names_answer_not_found_and_a_held_input_in_use(h):

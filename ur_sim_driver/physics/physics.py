@@ -98,6 +98,9 @@ class ArmPhysics:
         position, orientation = (int(m.sensor_adr[lookup(mujoco.mjtObj.mjOBJ_SENSOR, s, 'sensor')])
                                  for s in tcp_sensors)
         self._tcp_position, self._tcp_orientation = slice(position, position + 3), slice(orientation, orientation + 4)
+        # The site the TCP sensors measure (tool0), for its velocity.
+        self._tcp_site = int(m.sensor_objid[lookup(mujoco.mjtObj.mjOBJ_SENSOR, tcp_sensors[0], 'sensor')])
+        self._velocity6 = np.zeros(6)
         # Per geom, once: which belong to the robot (the subtree of the base body's root, i.e. arm and tool)
         # and the name a contact report uses (the body, or the geom for bodies fixed to the world).
         root = int(m.body_rootid[self._base])
@@ -244,6 +247,14 @@ class ArmPhysics:
         pose = np.empty(7)
         read_pose(self._d_sensordata, self._tcp_position.start, self._tcp_orientation.start, pose)
         return pose[:3], pose[3:]
+
+    def tcp_velocity(self) -> np.ndarray:
+        """(6,) the TCP's linear [m/s] and angular [rad/s] velocity now, in base axes (the base is fixed)."""
+        # mj_step1 has computed the velocities of the current state (the invariant of step()).
+        mujoco.mj_objectVelocity(self.model, self.data, mujoco.mjtObj.mjOBJ_SITE, self._tcp_site, self._velocity6, 0)
+        r_base = self.data.xmat[self._base].reshape(3, 3)  # world axes -> base axes: its transpose
+        angular, linear = self._velocity6[:3], self._velocity6[3:]
+        return np.concatenate((r_base.T @ linear, r_base.T @ angular))
 
     def wrench(self) -> np.ndarray:
         """(6,) force [N] and torque [N m] that the bodies beyond tool0 (tool, payload) exert on the arm,

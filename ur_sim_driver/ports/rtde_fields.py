@@ -95,6 +95,7 @@ READERS: dict[str, Callable[[Host], object]] = {
     'actual_q': lambda h: _vec(h.sim.state().q),
     'actual_qd': lambda h: _vec(reported_velocity(h.sim.state().qd, h.sim.control_dt)),
     'actual_TCP_pose': _pose, 'actual_TCP_force': _force, 'tcp_offset': lambda h: (0.0,) * 6,
+    'actual_TCP_speed': lambda h: _vec(h.sim.physics.tcp_velocity()),
     'speed_scaling': lambda h: h.speed_scaling.factor, 'target_speed_fraction': lambda h: h.speed_scaling.slider,
     'robot_mode': lambda h: h.robot.robot_mode, 'safety_mode': lambda h: h.robot.safety_mode,
     'safety_status': lambda h: h.robot.safety_mode,
