@@ -139,6 +139,42 @@ def test_the_tcp_speed_is_the_rate_of_the_tcp_pose(h):
     assert np.allclose(speed[1:, :3], linear, atol=1e-3) and np.allclose(speed[1:, 3:], angular, atol=1e-3)
 
 
+def test_the_target_tcp_is_where_the_setpoint_puts_it(h):
+    """target_TCP_pose and target_TCP_speed against Pinocchio's forward kinematics of the URDF at target_q, and its
+    derivative along target_qd (central differences), during a move."""
+    client = _connect(h)
+    try:
+        names = ['target_q', 'target_qd', 'target_TCP_pose', 'target_TCP_speed']
+        recipe, types = client.outputs(50.0, names)
+        assert recipe == 1 and types == ['VECTOR6D'] * 4
+        handle = h.send(h.goal([point(h.q + np.array([0.3, -0.2, 0.25, 0.3, -0.3, 0.4]), 1.0, [0.0] * 6)]))
+        assert client.request(ord('S')) == b'\x01'
+        _cycles(h, 200)
+        rows = [_unpack(types, client.data()[1]) for _ in range(10)]
+        assert client.request(ord('P')) == b'\x01'
+        h.result(handle)
+    finally:
+        client.close()
+    kin = {frame: Kinematics(h.sim.sim.urdf, h.joints, frame) for frame in ('base', 'tool0')}
+
+    def tcp(q):
+        q = np.asarray(q)
+        return np.linalg.inv(kin['base'].fk(q)) @ kin['tool0'].fk(q)
+
+    moving = 0
+    for q, qd, pose, speed in rows:
+        expected = tcp(q)
+        assert np.allclose(pose[:3], expected[:3, 3], atol=1e-6)
+        assert np.allclose(Rotation.from_rotvec(pose[3:]).as_matrix(), expected[:3, :3], atol=1e-6)
+        eps = 1e-6
+        ahead, behind = tcp(np.add(q, np.multiply(qd, eps))), tcp(np.subtract(q, np.multiply(qd, eps)))
+        linear = (ahead[:3, 3] - behind[:3, 3]) / (2 * eps)
+        angular = Rotation.from_matrix(ahead[:3, :3] @ behind[:3, :3].T).as_rotvec() / (2 * eps)
+        assert np.allclose(speed[:3], linear, atol=1e-6) and np.allclose(speed[3:], angular, atol=1e-6)
+        moving += np.abs(speed).max() > 0.05
+    assert moving >= 5
+
+
 def test_unknown_names_answer_not_found_and_a_held_input_in_use(h):
     first, second = _connect(h), _connect(h)
     try:

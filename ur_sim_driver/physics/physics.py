@@ -101,6 +101,7 @@ class ArmPhysics:
         # The site the TCP sensors measure (tool0), for its velocity.
         self._tcp_site = int(m.sensor_objid[lookup(mujoco.mjtObj.mjOBJ_SENSOR, tcp_sensors[0], 'sensor')])
         self._velocity6 = np.zeros(6)
+        self._scratch: mujoco.MjData | None = None  # for tcp_at, made when first needed
         # Per geom, once: which belong to the robot (the subtree of the base body's root, i.e. arm and tool)
         # and the name a contact report uses (the body, or the geom for bodies fixed to the world).
         root = int(m.body_rootid[self._base])
@@ -247,6 +248,28 @@ class ArmPhysics:
         pose = np.empty(7)
         read_pose(self._d_sensordata, self._tcp_position.start, self._tcp_orientation.start, pose)
         return pose[:3], pose[3:]
+
+    def tcp_at(self, q: np.ndarray, qd: np.ndarray) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
+        """The TCP (tool0) at joint positions `q` (n,) [rad] and velocities `qd` (n,) [rad/s], the rest of the state
+        as now, computed in a scratch copy of the data (the simulation is untouched): position (3,) [m] and rotation
+        matrix (3, 3) in the base frame, and its twist (6,) (linear [m/s], angular [rad/s]) in base axes."""
+        m = self.model
+        if self._scratch is None:
+            self._scratch = mujoco.MjData(m)
+        d = self._scratch
+        d.qpos[:] = self.data.qpos
+        d.qvel[:] = 0.0
+        d.qpos[self._qpos] = q
+        d.qvel[self._dof] = qd
+        mujoco.mj_kinematics(m, d)
+        mujoco.mj_comPos(m, d)
+        mujoco.mj_comVel(m, d)
+        r_base, p_base = d.xmat[self._base].reshape(3, 3), d.xpos[self._base]
+        position = r_base.T @ (d.site_xpos[self._tcp_site] - p_base)
+        rotation = r_base.T @ d.site_xmat[self._tcp_site].reshape(3, 3)
+        twist = np.zeros(6)
+        mujoco.mj_objectVelocity(m, d, mujoco.mjtObj.mjOBJ_SITE, self._tcp_site, twist, 0)
+        return position, rotation, np.concatenate((r_base.T @ twist[3:], r_base.T @ twist[:3]))
 
     def tcp_velocity(self) -> np.ndarray:
         """(6,) the TCP's linear [m/s] and angular [rad/s] velocity now, in base axes (the base is fixed)."""

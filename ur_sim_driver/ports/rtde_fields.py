@@ -64,6 +64,12 @@ def _target(host: Host, k: int) -> tuple[float, ...]:
     return _vec((setpoint.positions, setpoint.velocities, setpoint.accelerations)[k])
 
 
+def _target_tcp(host: Host) -> tuple[tuple[float, ...], tuple[float, ...]]:
+    """(target_TCP_pose, target_TCP_speed): the TCP where the servo's setpoint puts it, and its twist."""
+    position, rotation, twist = host.sim.physics.tcp_at(np.array(_target(host, 0)), np.array(_target(host, 1)))
+    return _vec(np.concatenate((position, Rotation.from_matrix(rotation).as_rotvec()))), _vec(twist)
+
+
 def _safety_bits(mode: int) -> int:
     bits = 1 << (mode - 1) if 1 <= mode <= 9 else 0
     if mode in (SYSTEM_EMERGENCY_STOP, ROBOT_EMERGENCY_STOP):
@@ -96,6 +102,7 @@ READERS: dict[str, Callable[[Host], object]] = {
     'actual_qd': lambda h: _vec(reported_velocity(h.sim.state().qd, h.sim.control_dt)),
     'actual_TCP_pose': _pose, 'actual_TCP_force': _force, 'tcp_offset': lambda h: (0.0,) * 6,
     'actual_TCP_speed': lambda h: _vec(h.sim.physics.tcp_velocity()),
+    'target_TCP_pose': lambda h: _target_tcp(h)[0], 'target_TCP_speed': lambda h: _target_tcp(h)[1],
     'speed_scaling': lambda h: h.speed_scaling.factor, 'target_speed_fraction': lambda h: h.speed_scaling.slider,
     'robot_mode': lambda h: h.robot.robot_mode, 'safety_mode': lambda h: h.robot.safety_mode,
     'safety_status': lambda h: h.robot.safety_mode,
