@@ -240,3 +240,27 @@ def test_a_ur_rtde_program_reads_the_robot_and_sets_an_output():
         assert np.allclose(pose[:3], expected[:3, 3], atol=1e-6)
         assert np.allclose(Rotation.from_rotvec(pose[3:]).as_matrix(), expected[:3, :3], atol=1e-6)
         wait_still(lambda: h.sim.sim.io.digital_out[3], what='digital output 3, set through RTDE')
+
+
+def test_protocol_one_has_no_output_recipe_ids_and_streams_at_the_control_rate(h):
+    """A client that never asks for protocol 2 speaks 1: the output set-up has no frequency and its answer no recipe
+    id, and the data packages carry the values alone, every control cycle."""
+    client = RtdeClient(h.sim.rtde_port.address)
+    try:
+        answer = client.request(ord('O'), b'timestamp,robot_mode')
+        assert answer.decode() == 'DOUBLE,INT32'
+        assert client.request(ord('S')) == b'\x01'
+        _cycles(h, 3)
+        stamps = []
+        for _ in range(3):
+            while True:
+                kind, payload = client.receive()
+                if kind == ord('U'):
+                    break
+            t, mode = struct.unpack('>di', payload)
+            stamps.append(t)
+            assert mode == 7
+        assert np.allclose(np.diff(stamps), 0.002, atol=1e-9)
+        assert client.request(ord('P')) == b'\x01'
+    finally:
+        client.close()
