@@ -144,8 +144,10 @@ class CdrTemplate:
         if stamp is not None and self.stamp_count:
             # One (sec, nanosec) for every stamp, or a pair each in the order of `stamps`; a negative Duration's
             # int32 sec goes into its unsigned word as two's complement.
-            words = stamp if len(stamp) == 2 * self.stamp_count else stamp * self.stamp_count
-            self._words[self._word_index] = [w & 0xFFFFFFFF for w in words] if min(words) < 0 else words
+            if len(stamp) == 2 or self.stamp_count == 1:  # one Time for every stamp (non-negative): every cycle
+                self._words[self._word_index] = stamp * self.stamp_count
+            else:  # a pair each, a Duration possibly negative (controller_state, while someone listens)
+                self._words[self._word_index] = [w & 0xFFFFFFFF for w in stamp]
 
 
 def listened(publisher: Publisher) -> Callable[[], bool]:
