@@ -51,14 +51,43 @@ class Lockstep:
     still; waits for something the robot does step it and check the condition after every cycle.
     """
 
+    LAG = 0.1  # [s] of robot time a followed listener may lag: 50 cycles, well under a listener's queue of 1000
+
     def __init__(self, node: UrSimNode) -> None:
         self.node = node
         self._lock = threading.Lock()  # one thread steps at a time
+        self._views: list = []  # callables giving a followed listener's newest robot time [s]
+
+    def follow(self, now) -> None:
+        """Step only while `now()` (a listener's newest robot time [s]) is within LAG of the simulated time."""
+        self._views.append(now)
+
+    def unfollow(self, now) -> None:
+        self._views.remove(now)
 
     def step(self, cycles: int = 1) -> None:
         with self._lock:
             for _ in range(cycles):
+                self._wait_for_followers()
                 self.node.step_once()
+
+    def _wait_for_followers(self) -> None:
+        """Hold still until every followed listener has caught up: stepping runs faster than a Python listener
+        takes messages, and a loaded machine let 1000 queued messages overflow (the oldest are dropped)."""
+        if not self._views:
+            return
+        t = self.node.sim.time - self.node.sim.control_dt  # the stamp of the last cycle published
+        deadline = time.monotonic() + TIMEOUT
+        while any(_lags(view(), t - self.LAG) for view in self._views):
+            if time.monotonic() > deadline:
+                raise TimeoutError(f'a followed listener stayed more than {self.LAG} s of robot time behind {t:.3f} s')
+            time.sleep(0.0005)  # polling a condition that DDS delivery changes; no cycle passes meanwhile
+
+
+def _lags(seen: float | None, due: float) -> bool:
+    """A followed listener's newest robot time `seen` [s] is before `due`; None (no message yet) never lags: its
+    subscription may not have matched yet, and the cycles before it matched are not its to see."""
+    return seen is not None and seen < due
 
 
 class Pacer:
@@ -180,6 +209,22 @@ def wait_answer(future, what: str = 'the answer', timeout: float = TIMEOUT):
 
 
 @contextmanager
+def following(now) -> Iterator[None]:
+    """Inside this block the innermost lockstep simulation steps only while `now()` (a listener's newest robot time
+    [s], None before its first message) keeps within Lockstep.LAG of it: every message of every cycle reaches a
+    listener that must see them all, however loaded the machine. Only around cycles in which its topic is
+    published: a listener whose topic falls silent holds the simulation until the wait times out."""
+    if not _lockstep:
+        raise RuntimeError('following() needs a lockstep simulation (a paced one follows clients with Pacer.follow)')
+    lockstep = _lockstep[-1]
+    lockstep.follow(now)
+    try:
+        yield
+    finally:
+        lockstep.unfollow(now)
+
+
+@contextmanager
 def holding() -> Iterator[None]:
     """A paced simulation (the innermost) takes no step inside this block; a lockstep one steps only in waits."""
     with _paced[-1].hold() if _paced else contextlib.nullcontext():
@@ -277,7 +322,9 @@ class SimHarness:
         self._js_topic = p('joint_states')
         self._scaling_topic = p('speed_scaling_state_broadcaster/speed_scaling')
         self._recorder: Node | None = None
+        self._recorder_followed: Lockstep | None = None  # the simulation that waits for the recorder
         self._listeners: list = []
+        self._listener_count = 0
         self._rosout: list[tuple[str, str]] | None = None
         ready_action(self.action)
         wait_still(lambda: self.topic.get_subscription_count() > 0, what='the joint_trajectory subscriber')
@@ -322,19 +369,37 @@ class SimHarness:
             self._recorder = (node, SpinThread(executor, 'test_recorder').start())
             wait_for(lambda: self.recording.t, what='the first recorded joint state')
             self.recording = Recording()
+            if _lockstep:  # the recording has every cycle: stepping waits for a recorder that lags
+                self._recorder_followed = _lockstep[-1]
+                self._recorder_followed.follow(self._recorded_until)
         return self.recording
 
-    def listen(self, msg_type, topic: str, callback, depth: int = 1000, latched: bool = False) -> None:
-        """Subscribe `callback` on a node with its own executor and thread for the harness's lifetime.
+    def _recorded_until(self) -> float | None:
+        """The stamp [s] of the newest joint state recorded, None before the first."""
+        rec = self.recording
+        return rec.t[-1] if rec is not None and rec.t else None
+
+    def listen(self, msg_type, topic: str, callback, depth: int = 1000, latched: bool = False):
+        """Subscribe `callback` on a node with its own executor and thread until the returned callable is called
+        (at the latest when the harness closes).
 
         `latched`: transient local, so that what was published before the subscription matched arrives too.
         """
-        node = Node(f'test_listener_{len(self._listeners)}', context=self.client.context)
+        self._listener_count += 1
+        node = Node(f'test_listener_{self._listener_count}', context=self.client.context)
         durability = DurabilityPolicy.TRANSIENT_LOCAL if latched else DurabilityPolicy.VOLATILE
         node.create_subscription(msg_type, topic, callback, QoSProfile(depth=depth, durability=durability))
         executor = SingleThreadedExecutor(context=self.client.context)
         executor.add_node(node)
-        self._listeners.append((node, SpinThread(executor, node.get_name()).start()))
+        entry = (node, SpinThread(executor, node.get_name()).start())
+        self._listeners.append(entry)
+
+        def stop() -> None:
+            if entry in self._listeners:
+                self._listeners.remove(entry)
+                entry[1].stop()
+                entry[0].destroy_node()
+        return stop
 
     def rosout(self) -> list[tuple[str, str]]:
         """(logger name, text) of every /rosout line from the first call on; the list grows as lines arrive."""
@@ -365,6 +430,9 @@ class SimHarness:
                        what=f'the joint state stamped {last_cycle:.3f} s in the recording')
         rec, self.recording = self.recording, None  # the callback stops appending at once
         if self._recorder is not None:
+            if self._recorder_followed is not None:
+                self._recorder_followed.unfollow(self._recorded_until)
+                self._recorder_followed = None
             node, spinner = self._recorder
             spinner.stop()
             node.destroy_node()

@@ -10,7 +10,7 @@ from control_msgs.action import FollowJointTrajectory
 from control_msgs.msg import JointTrajectoryControllerState, SpeedScalingFactor
 from control_msgs.srv import QueryTrajectoryState
 from rclpy.callback_groups import ReentrantCallbackGroup
-from sim_harness import point, ready_action, running_sim, wait_answer, wait_for, wait_still
+from sim_harness import following, point, ready_action, running_sim, wait_answer, wait_for, wait_still
 from ur_msgs.srv import SetSpeedSliderFraction
 
 from ur_glue_planner.execution.action_client import ActionClient
@@ -59,12 +59,15 @@ def test_one_rad_in_half_a_second_scaled_slows_down_unscaled_violates_the_path(r
     assert min(scaling) < 90.0  # the robot slowed itself, and the scaled controller waited for it
     assert h.cm.switch(activate=[JTC], deactivate=[SCALED]).ok
     states: list[float] = []
-    h.listen(JointTrajectoryControllerState, f'/{JTC}/controller_state',
-             lambda m: states.append(m.speed_scaling_factor), depth=10)
-    handle = _run(h, JTC, h.goal([point(h.q + 1.0, 0.5)]))
-    status, code, _ = h.result(handle)
-    assert (status, code) == (GoalStatus.STATUS_ABORTED, rc.PATH_TOLERANCE_VIOLATED)
-    wait_for(lambda: states, what='the unscaled controller state')
+    stop = h.listen(JointTrajectoryControllerState, f'/{JTC}/controller_state',
+                    lambda m: states.append(m.speed_scaling_factor), depth=10)
+    try:
+        handle = _run(h, JTC, h.goal([point(h.q + 1.0, 0.5)]))
+        status, code, _ = h.result(handle)
+        assert (status, code) == (GoalStatus.STATUS_ABORTED, rc.PATH_TOLERANCE_VIOLATED)
+        wait_for(lambda: states, what='the unscaled controller state')
+    finally:
+        stop()
     assert set(states) == {1.0}
     h.cm.switch(activate=[SCALED], deactivate=[JTC])
 
@@ -111,10 +114,10 @@ def test_the_scaled_controller_follows_the_robot_not_its_speed_scaling_input(rob
     h.cm.switch(activate=[SCALED], deactivate=[JTC], strictness=BEST_EFFORT)
     scaling = h.speed_scaling_input(SCALED)
     states: list[float] = []
+    scaling.publish(SpeedScalingFactor(factor=0.0))  # would pause the plain controller
+    stop = h.listen(JointTrajectoryControllerState, f'/{SCALED}/controller_state',  # every state after the input
+                    lambda m: states.append(m.speed_scaling_factor), depth=10)
     try:
-        scaling.publish(SpeedScalingFactor(factor=0.0))  # would pause the plain controller
-        h.listen(JointTrajectoryControllerState, f'/{SCALED}/controller_state',
-                 lambda m: states.append(m.speed_scaling_factor), depth=10)
         q0 = h.q
         t0 = h.sim.sim.time
         handle = _run(h, SCALED, h.goal([point(q0 + 0.2, 1.0, ZERO)]))
@@ -124,6 +127,7 @@ def test_the_scaled_controller_follows_the_robot_not_its_speed_scaling_input(rob
         wait_for(lambda: states, what='the scaled controller state')
         assert set(states) == {0.0}
     finally:
+        stop()
         scaling.publish(SpeedScalingFactor(factor=1.0))
 
 
@@ -153,12 +157,15 @@ def test_controller_state_comes_every_control_cycle(robot):
     h = robot
     h.cm.switch(activate=[SCALED], deactivate=[JTC], strictness=BEST_EFFORT)
     stamps: list[float] = []
-    h.listen(JointTrajectoryControllerState, f'/{SCALED}/controller_state',
-             lambda m: stamps.append(conv.time_to_sec(m.header.stamp)), depth=1000)
-    wait_for(lambda: stamps, what='the first controller_state')
-    t_end = h.sim.sim.time + 0.1
-    h.wait_sim_time(0.1)
-    wait_still(lambda: stamps[-1] >= t_end - 0.002 - 1e-9, what='the controller states of 0.1 s')
+    stop = h.listen(JointTrajectoryControllerState, f'/{SCALED}/controller_state',
+                    lambda m: stamps.append(conv.time_to_sec(m.header.stamp)), depth=1000)
+    try:
+        wait_for(lambda: stamps, what='the first controller_state')
+        t_end = h.sim.sim.time + 0.1
+        h.wait_sim_time(0.1)
+        wait_still(lambda: stamps[-1] >= t_end - 0.002 - 1e-9, what='the controller states of 0.1 s')
+    finally:
+        stop()
     periods = np.diff(np.array(stamps))
     assert len(periods) >= 50 and np.allclose(periods, h.sim.sim.control_dt, atol=1e-9), periods
 
@@ -173,11 +180,15 @@ def test_controller_state_is_filled_as_upstream_fills_it(robot):
     wait_still(slider.service_is_ready, what='set_speed_slider')
     assert wait_answer(slider.call_async(SetSpeedSliderFraction.Request(speed_slider_fraction=0.5))).success
     states: list[JointTrajectoryControllerState] = []
-    h.listen(JointTrajectoryControllerState, f'/{SCALED}/controller_state', states.append, depth=1000)
-    wait_for(lambda: states, what='the first controller_state')
-    q0 = h.q
-    handle = _run(h, SCALED, h.goal([point(q0 + np.array([0.2, 0, 0, 0, 0, 0]), 2.0)]))  # positions only: linear
-    assert h.result(handle)[1] == rc.SUCCESSFUL
+    stop = h.listen(JointTrajectoryControllerState, f'/{SCALED}/controller_state', states.append, depth=1000)
+    try:
+        wait_for(lambda: states, what='the first controller_state')
+        q0 = h.q
+        with following(lambda: conv.time_to_sec(states[-1].header.stamp)):  # every state of the move
+            handle = _run(h, SCALED, h.goal([point(q0 + np.array([0.2, 0, 0, 0, 0, 0]), 2.0)]))  # linear
+            assert h.result(handle)[1] == rc.SUCCESSFUL
+    finally:
+        stop()
     dt = h.sim.sim.control_dt
     moving = [m for m in list(states) if 0.01 < m.reference.positions[0] - q0[0] < 0.19]
     assert len(moving) > 1000  # 4 s at half speed
