@@ -7,7 +7,9 @@ import math
 import numpy as np
 import pytest
 
-from ur_glue_planner.motion.analytic_ik import (
+from ur_glue_planner.motion.kinematics import Kinematics
+from ur_glue_planner.orientation import rot_x, rot_z
+from ur_sim_driver.description.analytic_ik import (
     N_BRANCHES,
     UrAnalyticIK,
     angular_distance,
@@ -15,8 +17,6 @@ from ur_glue_planner.motion.analytic_ik import (
     nearest_branch,
     wrap_angle,
 )
-from ur_glue_planner.motion.kinematics import Kinematics
-from ur_glue_planner.orientation import rot_x, rot_z
 from ur_sim_driver.description.params import DH, UR_TYPES, joint_names, load_ur_params
 from ur_sim_driver.description.tool import get_tool
 from ur_sim_driver.description.urdf import build_urdf

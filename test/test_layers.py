@@ -14,7 +14,8 @@ import pytest
 import ur_glue_planner
 import ur_sim_driver
 
-ORDER = ('description', 'physics', 'robot', 'motion', 'gateway', 'controllers', 'ports', 'ros')  # lowest first
+# lowest first
+ORDER = ('description', 'physics', 'robot', 'motion', 'urscript', 'gateway', 'controllers', 'ports', 'ros')
 BASE = ('errors', 'paths', 'spin_thread')  # the modules at the top: importable by all, importing nothing of ours
 SHARED = ('description',)  # the layers ur_glue_planner may import, besides BASE
 ROOT = Path(ur_sim_driver.__file__).parent

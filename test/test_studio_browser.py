@@ -153,7 +153,10 @@ def test_save_writes_the_taught_job(studio, page):
     # Load it back through the page: the saved waypoints, all saved.
     page.locator('input:visible').nth(1).fill(str(path))  # the File tab's fields: Save as, Load (no labels)
     page.get_by_role('button', name='Load', exact=True).click()
-    wait_until(lambda: studio.sjob.path == Path(path), 'the file to load')
+    # The load replaces the job and then the taught state: the status line it writes last says it is done (sjob
+    # alone can be read between the two).
+    wait_until(lambda: any(m.startswith(f'loaded {path}') for m in list(studio.messages)), 'the file to load')
+    assert studio.sjob.path == Path(path)
     assert np.array_equal(studio.teach.planned_arrays()[0], positions)
     assert np.array_equal(studio.teach.planned_arrays()[1], zyx) and not studio.teach.skipped_indices()
 

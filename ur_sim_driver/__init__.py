@@ -4,9 +4,10 @@ Layers, each a subpackage; a module imports only from its own layer, the layers 
 top (``errors``, ``paths``, ``spin_thread``), which import nothing of ours (``test/test_layers.py`` checks it):
 
     ros          the ur_sim node, the dashboard services, robot_state_publisher, IO and wrench components
-    ports        the robot's own network ports: the dashboard server on TCP 29999
+    ports        the robot's own network ports: the dashboard server on TCP 29999, RTDE on 30004
     controllers  the driver's ros2_control controllers, one module each, and the controller manager
     gateway      the trajectory controllers' action and topic interfaces, in a process of their own
+    urscript     the URScript subset: parser, interpreter, the moves a script commands, the program slot
     motion       trajectories, their sampling, tolerances and validation, the trajectory controller core
     robot        the simulated robot: its state, safety, dashboard, IO, payload, speed scaling, glue gun
     physics      MuJoCo stepping, contacts and sensors, the joint servo and torque control

@@ -20,11 +20,11 @@ from dataclasses import dataclass
 import numpy as np
 
 from ur_glue_planner.errors import PlanningError
-from ur_glue_planner.motion.analytic_ik import follow_branch, nearest_branch
 from ur_glue_planner.motion.clearance import Clearance
 from ur_glue_planner.motion.kinematics import Kinematics
 from ur_glue_planner.motion.ur_arm_kinematics import UrKinematics
 from ur_glue_planner.path.glue_path import GluePath
+from ur_sim_driver.description.analytic_ik import follow_branch, nearest_branch
 
 _TWO_PI = 2.0 * math.pi
 _SPACING = 0.02  # [m] grid on which a branch is followed along the bead
@@ -106,7 +106,7 @@ def _follow_closed_form(kin: UrKinematics, s: np.ndarray, branches: np.ndarray, 
                         speed: float, max_jump: float,
                         clearance: Clearance | None = None) -> tuple[bool, float, str] | None:
     """:func:`follow` on the grid's closed-form branches made continuous (n, 8, n_joints)
-    (:func:`~ur_glue_planner.motion.analytic_ik.follow_branch`); None if q_start is on none of them."""
+    (:func:`~ur_sim_driver.description.analytic_ik.follow_branch`); None if q_start is on none of them."""
     branch, distance = nearest_branch(branches[0], q_start)
     if distance > 1e-3:
         return None

@@ -2,7 +2,7 @@
 
 :class:`UrKinematics` is a :class:`~ur_glue_planner.motion.kinematics.Kinematics` whose path IK
 (:meth:`UrKinematics.ik_path`) solves every pose at once in closed form
-(:mod:`~ur_glue_planner.motion.analytic_ik`), keeps the branch the first pose's Newton solution
+(:mod:`~ur_sim_driver.description.analytic_ik`), keeps the branch the first pose's Newton solution
 is in, and then checks each sample with Pinocchio's forward kinematics of the URDF: a sample
 more than the IK tolerance off is refined by Newton steps (:meth:`Kinematics.ik`). Where the
 branch ends (out of reach) or leaves the joint limits, per-sample Newton takes over, so
@@ -16,8 +16,8 @@ from collections.abc import Sequence
 import numpy as np
 import pinocchio as pin
 
-from ur_glue_planner.motion.analytic_ik import UrAnalyticIK, follow_branch, nearest_branch
 from ur_glue_planner.motion.kinematics import Kinematics, PathIk, pose_errors
+from ur_sim_driver.description.analytic_ik import UrAnalyticIK, follow_branch, nearest_branch
 from ur_sim_driver.description.params import DH, URParams, joint_names, load_ur_params
 from ur_sim_driver.description.tool import ToolDef, get_tool
 from ur_sim_driver.description.urdf import build_urdf

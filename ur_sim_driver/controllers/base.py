@@ -32,6 +32,7 @@ if TYPE_CHECKING:  # imported for annotations only: no import cycle with the nod
     from ur_sim_driver.robot.sim_config import SimConfig
     from ur_sim_driver.robot.simulator import Simulator
     from ur_sim_driver.robot.speed_scaling import RobotSpeedScaling
+    from ur_sim_driver.urscript.runner import ScriptRunner
 
 
 @dataclass(frozen=True, eq=False)
@@ -84,6 +85,7 @@ class Host:
         robot_files: the robot's file system (flight reports, support files), a directory of this run.
         dashboard: the robot's dashboard command interpreter, one for the ROS services and the TCP port (under
             `lock`).
+        scripts: the controller's URScript program slot (under `lock`).
     """
 
     cfg: SimConfig
@@ -94,6 +96,7 @@ class Host:
     context: object
     robot_files: Path | None = None
     dashboard: DashboardServer | None = None
+    scripts: ScriptRunner | None = None
     # Conditions a service callback waits for, each with the event the loop sets once it holds (under `lock`).
     _waiters: list[tuple[Callable[[], bool], threading.Event]] = field(default_factory=list)
 

@@ -71,6 +71,7 @@ class RobotState:
         self._pending: list[tuple[float, int]] = []  # (time [s], mode) steps of a transition under way
         self._now = 0.0
         self.registers = Registers()  # the general purpose registers (RTDE, URScript)
+        self.script: str | None = None  # the URScript program playing instead of the loaded one (its name)
 
     # ---- queries ------------------------------------------------------------------------------
     def status(self) -> RobotStatus:
@@ -85,7 +86,8 @@ class RobotState:
     @property
     def program_running(self) -> bool:
         """The driver's robot_program_running: the External Control program is playing."""
-        return self.program_state == PLAYING and self.loaded_program == EXTERNAL_CONTROL_PROGRAM
+        return (self.program_state == PLAYING and self.loaded_program == EXTERNAL_CONTROL_PROGRAM
+                and self.script is None)
 
     @property
     def loaded_program_path(self) -> str:
@@ -99,6 +101,9 @@ class RobotState:
             return f'safety mode is {SAFETY_MODE_NAMES[self.safety_mode]}{cause}; motion needs NORMAL'
         if self.robot_mode != RUNNING:
             return f'robot mode is {ROBOT_MODE_NAMES[self.robot_mode]}; motion needs RUNNING'
+        if self.script is not None and self.program_state == PLAYING:
+            return (f'robot_program_running is false (URScript program {self.script} is playing); motion needs the '
+                    'External Control program playing')
         if not self.program_running:
             what = (f'program {self.loaded_program} is {self.program_state}'
                     if self.loaded_program == EXTERNAL_CONTROL_PROGRAM or self.program_state != PLAYING
@@ -181,6 +186,23 @@ class RobotState:
         self.program_state = STOPPED
         return None
 
+    def start_script(self, name: str) -> str | None:
+        """A URScript program `name` replaces the running program (sent over the primary interface)."""
+        if self.robot_mode != RUNNING:
+            return f'robot mode is {ROBOT_MODE_NAMES[self.robot_mode]}; a program needs RUNNING'
+        if self.safety_mode != NORMAL:
+            return f'safety mode is {SAFETY_MODE_NAMES[self.safety_mode]}; a program needs NORMAL'
+        self.script = name
+        self.program_state = PLAYING
+        return None
+
+    def end_script(self, name: str) -> None:
+        """URScript program `name` has ended: no program plays (the External Control program was replaced)."""
+        if self.script == name:
+            self.script = None
+            if self.program_state == PLAYING:
+                self.program_state = STOPPED
+
     def load_program(self, filename: str) -> str | None:
         """Load a program by name or path in PROGRAM_DIR; the program is STOPPED afterwards."""
         name = self.program_file(filename)
@@ -223,6 +245,7 @@ class RobotState:
             return self.motion_refusal()
         self.loaded_program = EXTERNAL_CONTROL_PROGRAM
         self.program_state = PLAYING
+        self.script = None  # the driver's program replaces a URScript program that plays
         return None
 
     def hand_back_control(self) -> str | None:

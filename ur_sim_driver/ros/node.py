@@ -69,7 +69,9 @@ from ur_sim_driver.ros.robot_state_publisher import RobotStatePublisher
 from ur_sim_driver.ros.sim_io import SimulatedInputs
 from ur_sim_driver.ros.sim_wrench import AppliedWrenches
 from ur_sim_driver.ros.trajectory_until import TrajectoryUntilNode
+from ur_sim_driver.ros.urscript_interface import URScriptInterface
 from ur_sim_driver.spin_thread import SpinThread
+from ur_sim_driver.urscript.runner import ScriptRunner
 
 GIL_SWITCH_INTERVAL = 2e-4  # [s]
 VIEWER_FRAME_PERIOD = 1.0 / 30.0  # [s] of wall time
@@ -135,8 +137,11 @@ class UrSimNode(Node):
         # The robot's file system for this run (the dashboard's flight reports and support files).
         self._robot_files = tempfile.TemporaryDirectory(prefix='ur_sim_robot_')
         files = Path(self._robot_files.name)
+        scripts = ScriptRunner(self.sim, self.robot, lambda: self.scaling.factor,
+                               lambda text: self.get_logger().info(f'textmsg: {text}'))
         self.host = Host(self.cfg, self.sim, self._lock, self.robot, self.scaling, self.context, files,
-                         DashboardServer(self.robot, self.cfg.simulated_ur_type, self.cfg.software_version, files))
+                         DashboardServer(self.robot, self.cfg.simulated_ur_type, self.cfg.software_version, files),
+                         scripts)
         feedback_every = round(self.sim.control_rate / self.cfg.action_monitor_rate)
         for name in trajectory_names:
             core = TrajectoryController(self.joints, self._defaults, self.sim.state().q, params.v_max,
@@ -154,7 +159,7 @@ class UrSimNode(Node):
             JointStateBroadcaster(), SpeedScalingStateBroadcaster(), TcpPoseBroadcaster(),
             IoAndStatusController(), UrConfigurationController(), GravityUpdateController(), FrictionModelController(),
             *((DashboardClient(),) if self.cfg.launch_dashboard_client else ()), RobotStateHelper(),
-            TrajectoryUntilNode(), SimulatedInputs(),
+            TrajectoryUntilNode(), URScriptInterface(), SimulatedInputs(),
             ForceTorqueSensorBroadcaster(), RobotStatePublisher(), SimulatedDispenser(),
             *self._trajectory.values(), ForwardCommandController('position'), ForwardCommandController('velocity'),
             ForwardCommandController('effort'),
@@ -309,9 +314,12 @@ class UrSimNode(Node):
             self.robot.update(state.t)
             self._controller_stopper()
             hardware = self.controller_manager.hardware
-            # Commands reach the robot only while the hardware component writes (is active).
-            commander = next((c for c in self._commanders if c.active), self._holder) if hardware.writes \
-                else self._holder
+            # A URScript program commands the arm while it plays; else the driver's commands reach the robot only
+            # while the hardware component writes (is active).
+            commander = self.host.scripts.commander()
+            if commander is None:
+                commander = next((c for c in self._commanders if c.active), self._holder) if hardware.writes \
+                    else self._holder
             if commander is not self._commander:
                 commander.take_over(reported)
                 self._commander = commander
@@ -333,6 +341,7 @@ class UrSimNode(Node):
                 self.robot.protective_stop(self.sim.time, cause)
                 self._controller_stopper()
             robot_factor = self.scaling.factor
+            self.host.scripts.after_cycle()
             self.host.check_waiters()
         if hardware.reads or self._last_read is None:
             self._last_read = (reported, tcp_position, tcp_orientation, wrench)

@@ -17,7 +17,9 @@ the Universal Robots UR-5/UR-10 arms", 2013), written with our own symbols:
 Frames: DH frame 0 is the UR controller's base frame, ``base_link`` turned by pi about z (as
 in ``ur_description``), and DH frame 6 is ``tool0``. :class:`UrAnalyticIK` adds a fixed
 tool offset (e.g. ``tool0`` to ``dispenser_tip``) and the pose of ``base_link`` in a world, so
-its poses mean the same as those of :class:`~ur_glue_planner.motion.kinematics.Kinematics`.
+its poses mean the same as those of the planner's Pinocchio kinematics. It lives with the description
+(the DH parameters it solves) because both the planner and ur_sim's URScript (``movel``, ``get_inverse_kin``)
+use it.
 
 Branch index ``b`` (0..7) = 4 * shoulder + 2 * wrist + elbow, each bit 0 for the ``+acos``
 root: bit wrist = 0 means q5 >= 0, bit elbow = 0 means q3 >= 0.

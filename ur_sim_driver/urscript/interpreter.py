@@ -1,0 +1,512 @@
+"""The URScript interpreter: walks the syntax tree of ``grammar.parse`` as a generator that yields a request each time
+the program needs robot time (a motion, ``sleep``, ``sync``), and runs everything else at once.
+
+What a statement does to the robot goes through :class:`ScriptRobot` (``program.py`` implements it on the simulated
+robot, under the simulation lock). A name that is neither a variable nor a function, a wrong argument, an index
+out of range: a :class:`~ur_sim_driver.errors.ScriptError` with the line and column, as the controller's runtime
+exceptions have them; the program stops there.
+"""
+from __future__ import annotations
+
+import math
+from collections.abc import Callable, Generator
+from dataclasses import dataclass
+from typing import Any, Protocol
+
+import numpy as np
+from lark import Token, Tree
+
+from ur_sim_driver.errors import ScriptError
+from ur_sim_driver.urscript.values import Pose, pose_add, pose_dist, pose_inv, pose_trans, show
+
+# A loop that runs this many times without spending robot time is the controller's "infinite loop" error.
+MAX_ITERATIONS_WITHOUT_TIME = 100_000
+
+
+@dataclass(frozen=True)
+class Request:
+    """What the program waits for: `kind` ('move', 'sleep', 'sync') and its arguments (a move's: its name and the
+    URScript arguments, resolved)."""
+
+    kind: str
+    args: tuple = ()
+
+
+class ScriptRobot(Protocol):
+    """What a program reads and sets on the robot (motions go out as Requests)."""
+
+    def joint_positions(self) -> list[float]: ...
+    def tcp_pose(self) -> Pose: ...
+    def inverse_kin(self, pose: Pose, qnear: list[float] | None) -> list[float]: ...
+    def set_digital_out(self, pin: int, on: bool) -> None: ...  # ur_msgs numbering: 0-7, 8-15, 16-17 (tool)
+    def digital_out(self, pin: int) -> bool: ...
+    def digital_in(self, pin: int) -> bool: ...
+    def set_analog_out(self, pin: int, fraction: float) -> None: ...
+    def set_payload(self, mass: float, cog: list[float]) -> None: ...
+    def registers(self): ...  # robot.registers.Registers
+    def textmsg(self, text: str) -> None: ...
+
+
+class _Return(Exception):
+    def __init__(self, value) -> None:
+        self.value = value
+
+
+class _Break(Exception):
+    pass
+
+
+class _Continue(Exception):
+    pass
+
+
+class _Halt(Exception):
+    pass
+
+
+class Interpreter:
+    """Runs one program's tree against `robot`; :meth:`run` is the generator. `secondary`: a ``sec`` program,
+    which may not spend robot time (the controller refuses motion and sleep there)."""
+
+    def __init__(self, tree: Tree, robot: ScriptRobot) -> None:
+        self.robot = robot
+        statements = list(tree.children)
+        self.secondary = len(statements) == 1 and statements[0].data == 'secdef'
+        if len(statements) == 1 and statements[0].data in ('funcdef', 'secdef'):
+            self.name = str(statements[0].children[0])
+            self.body = _block(statements[0])
+        else:
+            self.name = ''
+            self.body = statements
+        self.globals: dict[str, Any] = {}
+        self.functions: dict[str, Tree] = {}
+        self._spinning = 0  # loop iterations since robot time was last spent
+        self.line, self.column = 0, 0  # the statement running (1-based)
+        self.builtins = _builtins(self)
+
+    def run(self) -> Generator[Request, None, None]:
+        try:
+            yield from self._block(self.body, self.globals)
+        except _Halt:
+            return
+        except _Return:
+            return
+        except (_Break, _Continue) as exc:
+            raise ScriptError(f'{type(exc).__name__[1:].lower()} outside a loop') from None
+
+    # ---- statements --------------------------------------------------------------------------------------
+    def _block(self, statements, scope: dict) -> Generator[Request, None, None]:
+        for statement in statements:
+            yield from self._statement(statement, scope)
+
+    def _statement(self, node: Tree, scope: dict):
+        kind = node.data
+        self.line, self.column = node.meta.line, node.meta.column  # where a request's failure points
+        try:
+            if kind == 'assign':
+                yield from self._assign(node, scope)
+            elif kind == 'call_stmt':
+                yield from self._eval(node.children[0], scope)
+            elif kind == 'if_stmt':
+                yield from self._if(node, scope)
+            elif kind == 'while_stmt':
+                yield from self._while(node, scope)
+            elif kind in ('funcdef', 'secdef'):
+                self.functions[str(node.children[0])] = node
+            elif kind == 'return_stmt':
+                value = (yield from self._eval(node.children[0], scope)) if node.children else None
+                raise _Return(value)
+            elif kind == 'break_stmt':
+                raise _Break()
+            elif kind == 'continue_stmt':
+                raise _Continue()
+            elif kind == 'halt_stmt':
+                raise _Halt()
+        except ScriptError as exc:
+            if exc.line == 0 and getattr(node.meta, 'line', None):
+                raise ScriptError(f'line {node.meta.line}: {exc}', node.meta.line, node.meta.column) from None
+            raise
+
+    def _assign(self, node: Tree, scope: dict):
+        children = list(node.children)
+        declared = str(children.pop(0)) if isinstance(children[0], Token) and children[0].type == 'SCOPE' else None
+        target, value_node = children
+        value = yield from self._eval(value_node, scope)
+        name = str(target.children[0])
+        into = self.globals if declared == 'global' or (name in self.globals and name not in scope
+                                                         and declared != 'local') else scope
+        if target.data == 'var_target':
+            into[name] = _copy(value)
+            return
+        index = yield from self._eval(target.children[1], scope)
+        container = self._lookup(name, scope)
+        if not isinstance(container, list):
+            raise ScriptError(f'{name} is not a list; only list elements can be assigned by index')
+        container[self._index(index, len(container), name)] = _copy(value)
+
+    def _if(self, node: Tree, scope: dict):
+        children = node.children
+        if _truth((yield from self._eval(children[0], scope))):
+            yield from self._block(children[1].children, scope)
+            return
+        for clause in children[2:]:
+            if clause.data == 'elif_clause':
+                if _truth((yield from self._eval(clause.children[0], scope))):
+                    yield from self._block(clause.children[1].children, scope)
+                    return
+            else:
+                yield from self._block(clause.children[0].children, scope)
+                return
+
+    def _while(self, node: Tree, scope: dict):
+        condition, body = node.children
+        while _truth((yield from self._eval(condition, scope))):
+            self._spinning += 1
+            if self._spinning > MAX_ITERATIONS_WITHOUT_TIME:
+                raise ScriptError(f'infinite loop detected: the loop on line {node.meta.line} ran '
+                                  f'{MAX_ITERATIONS_WITHOUT_TIME} times without spending robot time (add sync() or '
+                                  'sleep())', node.meta.line, node.meta.column)
+            try:
+                yield from self._block(body.children, scope)
+            except _Break:
+                break
+            except _Continue:
+                continue
+
+    def spent_time(self) -> None:
+        """The program waited for robot time: its loops start counting again."""
+        self._spinning = 0
+
+    # ---- expressions -------------------------------------------------------------------------------------
+    def _eval(self, node, scope: dict):
+        kind = node.data
+        if kind == 'number':
+            text = str(node.children[0])
+            return float(text) if any(c in text for c in '.eE') else int(text)
+        if kind == 'true':
+            return True
+        if kind == 'false':
+            return False
+        if kind == 'string':
+            return str(node.children[0])[1:-1]
+        if kind == 'var':
+            return self._lookup(str(node.children[0]), scope)
+        if kind in ('list_', 'pose'):
+            items = [c for c in node.children if isinstance(c, Tree)]
+            values = []
+            for expr in (items[0].children if items else []):
+                values.append((yield from self._eval(expr, scope)))
+            if kind == 'list_':
+                return values
+            if len(values) != 6 or not all(is_number(v) for v in values):
+                raise ScriptError(f'a pose has 6 numbers (x, y, z [m], rx, ry, rz [rad]); got {show(values)}')
+            return Pose(tuple(float(v) for v in values))
+        if kind == 'index':
+            container = yield from self._eval(node.children[0], scope)
+            index = yield from self._eval(node.children[1], scope)
+            items = container.values if isinstance(container, Pose) else container
+            if not isinstance(items, (list, tuple)):
+                raise ScriptError(f'{show(container)} cannot be indexed (not a list or pose)')
+            return items[self._index(index, len(items), 'the list')]
+        if kind == 'call':
+            return (yield from self._call(node, scope))
+        if kind == 'neg':
+            value = yield from self._eval(node.children[0], scope)
+            return _arith('-', 0, value) if not isinstance(value, list) else [-v for v in value]
+        if kind == 'not_':
+            return not _truth((yield from self._eval(node.children[0], scope)))
+        if kind in ('and_', 'or_', 'xor_'):
+            left = _truth((yield from self._eval(node.children[0], scope)))
+            if kind == 'and_' and not left:
+                return False
+            if kind == 'or_' and left:
+                return True
+            right = _truth((yield from self._eval(node.children[1], scope)))
+            return left != right if kind == 'xor_' else right
+        if kind == 'compare':
+            left = yield from self._eval(node.children[0], scope)
+            right = yield from self._eval(node.children[2], scope)
+            return _compare(str(node.children[1]), left, right)
+        if kind == 'binop':
+            left = yield from self._eval(node.children[0], scope)
+            right = yield from self._eval(node.children[2], scope)
+            return _arith(str(node.children[1]), left, right)
+        if kind == 'factor':  # unary plus
+            return (yield from self._eval(node.children[0], scope))
+        raise ScriptError(f'{kind} is not supported by ur_sim')
+
+    def _lookup(self, name: str, scope: dict):
+        if name in scope:
+            return scope[name]
+        if name in self.globals:
+            return self.globals[name]
+        raise ScriptError(f'variable {name!r} is not defined')
+
+    @staticmethod
+    def _index(index, length: int, what: str) -> int:
+        if not isinstance(index, int) or isinstance(index, bool):
+            raise ScriptError(f'an index is an integer; got {show(index)}')
+        if not 0 <= index < length:
+            raise ScriptError(f'index {index} is out of range for {what} of length {length}')
+        return index
+
+    def _call(self, node: Tree, scope: dict):
+        name = str(node.children[0])
+        positional, keywords = [], {}
+        if len(node.children) > 1:
+            for arg in node.children[1].children:
+                if isinstance(arg, Tree) and arg.data == 'kwarg':
+                    keywords[str(arg.children[0])] = yield from self._eval(arg.children[1], scope)
+                else:
+                    positional.append((yield from self._eval(arg, scope)))
+        if name in self.functions:
+            return (yield from self._user_call(self.functions[name], positional, keywords))
+        if name not in self.builtins:
+            raise ScriptError(f'unknown function {name!r}: it is not defined in the program and not among the '
+                              'functions ur_sim supports (docs/urscript.md)')
+        parameters, function = self.builtins[name]
+        bound = _bind(name, parameters, positional, keywords)
+        result = function(*bound)
+        if isinstance(result, Request):
+            if self.secondary:
+                raise ScriptError(f'{name}: a secondary program (sec) cannot spend robot time; use a def program')
+            return (yield result)
+        return result
+
+    def _user_call(self, definition: Tree, positional: list, keywords: dict):
+        name = str(definition.children[0])
+        params = [c for c in definition.children[1:] if isinstance(c, Tree) and c.data == 'params']
+        spec = [(str(p.children[0]), p.children[1] if len(p.children) > 1 else None)
+                for p in (params[0].children if params else [])]
+        names = [n for n, _ in spec]
+        if len(positional) > len(spec):
+            raise ScriptError(f'{name}() takes at most {len(spec)} arguments; got {len(positional)}')
+        local: dict[str, Any] = dict(zip(names, positional))
+        for key, value in keywords.items():
+            if key not in names:
+                raise ScriptError(f'{name}() has no argument {key!r}; its arguments: {", ".join(names)}')
+            local[key] = value
+        for param, default in spec:
+            if param not in local:
+                if default is None:
+                    raise ScriptError(f'{name}() needs argument {param!r} ({", ".join(names)})')
+                local[param] = yield from self._eval(default, self.globals)
+        try:
+            yield from self._block(_block(definition), local)
+        except _Return as ret:
+            return ret.value
+        return None
+
+
+_REQUIRED = object()
+
+
+def _block(definition: Tree) -> list:
+    return next(c for c in definition.children if isinstance(c, Tree) and c.data == 'block').children
+
+
+def _bind(name: str, parameters: list, positional: list, keywords: dict) -> list:
+    """Arguments in parameter order; parameters are (name, default or _REQUIRED)."""
+    names = [p for p, _ in parameters]
+    if len(positional) > len(parameters):
+        raise ScriptError(f'{name}() takes at most {len(parameters)} arguments ({", ".join(names)}); '
+                          f'got {len(positional)}')
+    values = list(positional) + [None] * (len(parameters) - len(positional))
+    for key, value in keywords.items():
+        if key not in names:
+            raise ScriptError(f'{name}() has no argument {key!r}; its arguments: {", ".join(names)}')
+        values[names.index(key)] = value
+    for k, (param, default) in enumerate(parameters):
+        if values[k] is None and k >= len(positional) and param not in keywords:
+            if default is _REQUIRED:
+                raise ScriptError(f'{name}() needs argument {param!r} ({", ".join(names)})')
+            values[k] = default
+    return values
+
+
+def _copy(value):
+    return [_copy(v) for v in value] if isinstance(value, list) else value
+
+
+def is_number(v) -> bool:
+    return isinstance(v, (int, float)) and not isinstance(v, bool)
+
+
+def _truth(v) -> bool:
+    if isinstance(v, bool):
+        return v
+    if is_number(v):
+        return v != 0
+    raise ScriptError(f'a condition is a boolean or a number; got {show(v)}')
+
+
+def _compare(op: str, a, b) -> bool:
+    if op in ('==', '!='):
+        equal = (a == b) if not (isinstance(a, Pose) or isinstance(b, Pose)) else a == b
+        return equal if op == '==' else not equal
+    if not (is_number(a) and is_number(b)):
+        raise ScriptError(f'{show(a)} {op} {show(b)}: only numbers are ordered')
+    return {'<': a < b, '>': a > b, '<=': a <= b, '>=': a >= b}[op]
+
+
+def _arith(op: str, a, b):
+    if isinstance(a, str) and isinstance(b, str) and op == '+':
+        return a + b
+    if isinstance(a, Pose) and isinstance(b, Pose) and op in '+-':
+        sign = 1.0 if op == '+' else -1.0
+        return Pose(tuple(x + sign * y for x, y in zip(a.values, b.values)))
+    if isinstance(a, list) or isinstance(b, list):
+        la = a if isinstance(a, list) else [a] * len(b)
+        lb = b if isinstance(b, list) else [b] * len(a)
+        if len(la) != len(lb):
+            raise ScriptError(f'{show(a)} {op} {show(b)}: the lists differ in length')
+        return [_arith(op, x, y) for x, y in zip(la, lb)]
+    if not (is_number(a) and is_number(b)):
+        raise ScriptError(f'{show(a)} {op} {show(b)}: not numbers')
+    if op == '+':
+        return a + b
+    if op == '-':
+        return a - b
+    if op == '*':
+        return a * b
+    if b == 0:
+        raise ScriptError(f'{show(a)} {op} 0: division by zero')
+    if op == '/':
+        return a // b if isinstance(a, int) and isinstance(b, int) and a % b == 0 else a / b
+    return a % b
+
+
+def _number(name: str, value, low: float = -math.inf, high: float = math.inf) -> float:
+    if not is_number(value) or not math.isfinite(value):
+        raise ScriptError(f'{name} is a finite number; got {show(value)}')
+    if not low <= value <= high:
+        raise ScriptError(f'{name} = {show(value)} is outside [{low:g}, {high:g}]')
+    return float(value)
+
+
+def _integer(name: str, value, low: int, high: int) -> int:
+    if not isinstance(value, int) or isinstance(value, bool) or not low <= value <= high:
+        raise ScriptError(f'{name} is an integer in [{low}, {high}]; got {show(value)}')
+    return value
+
+
+def _vector(name: str, value, n: int = 6) -> list[float]:
+    items = value.values if isinstance(value, Pose) else value
+    if not isinstance(items, (list, tuple)) or len(items) != n or not all(is_number(v) for v in items):
+        raise ScriptError(f'{name} is a list of {n} numbers; got {show(value)}')
+    return [float(v) for v in items]
+
+
+def _pose(name: str, value) -> Pose:
+    if not isinstance(value, Pose):
+        raise ScriptError(f'{name} is a pose p[x, y, z, rx, ry, rz]; got {show(value)}')
+    return value
+
+
+def _builtins(it: Interpreter) -> dict[str, tuple[list, Callable]]:
+    """name -> ([(argument, default or _REQUIRED)], function)."""
+    robot = it.robot
+    R = _REQUIRED
+
+    def move(kind):
+        return lambda *args: Request('move', (kind, *args))
+
+    def digital(name, offset, count):
+        def set_out(n, b):
+            robot.set_digital_out(offset + _integer(f'{name}: n', n, 0, count - 1), _truth(b))
+        return set_out
+
+    def register(kind, side, write=False):
+        from ur_sim_driver.robot.registers import N_BITS, N_DOUBLES, N_INTS
+        size = {'integer': N_INTS, 'float': N_DOUBLES, 'boolean': N_BITS}[kind]
+        attr = {'integer': 'ints', 'float': 'doubles', 'boolean': 'bits'}[kind]
+        cast = {'integer': lambda v: int(_number('value', v)), 'float': lambda v: _number('value', v),
+                'boolean': _truth}[kind]
+        verb = 'write' if write else 'read'
+        label = f'{verb}_{side}_{kind}_register'
+        if write:
+            def write_register(n, value):
+                getattr(robot.registers(), f'{side}_{attr}')[_integer(f'{label}: address', n, 0, size - 1)] = \
+                    cast(value)
+            return [('address', R), ('value', R)], write_register
+        return [('address', R)], lambda n: getattr(robot.registers(), f'{side}_{attr}')[
+            _integer(f'{label}: address', n, 0, size - 1)]
+
+    def textmsg(s1, s2=''):
+        robot.textmsg(show(s1) + show(s2))
+
+    def set_analog(n, f):
+        robot.set_analog_out(_integer('set_analog_out: n', n, 0, 1), _number('set_analog_out: f', f, 0.0, 1.0))
+
+    def set_payload(m, cog=None):
+        robot.set_payload(_number('set_payload: m', m, 0.0), _vector('set_payload: cog', cog, 3) if cog is not None
+                          else [0.0, 0.0, 0.0])
+
+    def inverse_kin(x, qnear=None, maxPositionError=1e-10, maxOrientationError=1e-10, tcp=None):  # noqa: N803
+        return robot.inverse_kin(_pose('get_inverse_kin: x', x),
+                                 None if qnear is None else _vector('get_inverse_kin: qnear', qnear))
+
+    def sleep(t):
+        return Request('sleep', (_number('sleep: t', t, 0.0),))
+
+    def norm(a):
+        if isinstance(a, (list, Pose)):
+            return float(np.linalg.norm(_vector('norm: a', a, len(a.values if isinstance(a, Pose) else a))))
+        return abs(_number('norm: a', a))
+
+    table = {
+        'movej': ([('q', R), ('a', 1.4), ('v', 1.05), ('t', 0.0), ('r', 0.0)], move('movej')),
+        'movel': ([('pose', R), ('a', 1.2), ('v', 0.25), ('t', 0.0), ('r', 0.0)], move('movel')),
+        'speedj': ([('qd', R), ('a', R), ('t', None)], move('speedj')),
+        'stopj': ([('a', R)], move('stopj')),
+        'servoj': ([('q', R), ('a', 0.0), ('v', 0.0), ('t', 0.002), ('lookahead_time', 0.1), ('gain', 300.0)],
+                   move('servoj')),
+        'sleep': ([('t', R)], sleep),
+        'sync': ([], lambda: Request('sync')),
+        'textmsg': ([('s1', R), ('s2', '')], textmsg),
+        'set_digital_out': ([('n', R), ('b', R)], digital('set_digital_out', 0, 8)),
+        'set_standard_digital_out': ([('n', R), ('b', R)], digital('set_standard_digital_out', 0, 8)),
+        'set_configurable_digital_out': ([('n', R), ('b', R)], digital('set_configurable_digital_out', 8, 8)),
+        'set_tool_digital_out': ([('n', R), ('b', R)], digital('set_tool_digital_out', 16, 2)),
+        'set_analog_out': ([('n', R), ('f', R)], set_analog),
+        'set_standard_analog_out': ([('n', R), ('f', R)], set_analog),
+        'get_standard_digital_in': ([('n', R)], lambda n: robot.digital_in(_integer('n', n, 0, 7))),
+        'get_standard_digital_out': ([('n', R)], lambda n: robot.digital_out(_integer('n', n, 0, 7))),
+        'get_configurable_digital_in': ([('n', R)], lambda n: robot.digital_in(8 + _integer('n', n, 0, 7))),
+        'get_configurable_digital_out': ([('n', R)], lambda n: robot.digital_out(8 + _integer('n', n, 0, 7))),
+        'get_tool_digital_in': ([('n', R)], lambda n: robot.digital_in(16 + _integer('n', n, 0, 1))),
+        'get_tool_digital_out': ([('n', R)], lambda n: robot.digital_out(16 + _integer('n', n, 0, 1))),
+        'set_payload': ([('m', R), ('cog', None)], set_payload),
+        'get_actual_joint_positions': ([], lambda: robot.joint_positions()),
+        'get_actual_tcp_pose': ([], lambda: robot.tcp_pose()),
+        'get_inverse_kin': ([('x', R), ('qnear', None), ('maxPositionError', 1e-10),
+                             ('maxOrientationError', 1e-10), ('tcp', None)], inverse_kin),
+        'pose_trans': ([('p_from', R), ('p_from_to', R)],
+                       lambda a, b: pose_trans(_pose('pose_trans: p_from', a), _pose('pose_trans: p_from_to', b))),
+        'pose_inv': ([('p_from', R)], lambda a: pose_inv(_pose('pose_inv: p_from', a))),
+        'pose_add': ([('p_1', R), ('p_2', R)], lambda a, b: pose_add(_pose('pose_add: p_1', a),
+                                                                     _pose('pose_add: p_2', b))),
+        'pose_dist': ([('p_from', R), ('p_to', R)], lambda a, b: pose_dist(_pose('pose_dist: p_from', a),
+                                                                           _pose('pose_dist: p_to', b))),
+        'norm': ([('a', R)], norm),
+        'sqrt': ([('f', R)], lambda f: math.sqrt(_number('sqrt: f', f, 0.0))),
+        'sin': ([('f', R)], lambda f: math.sin(_number('sin: f', f))),
+        'cos': ([('f', R)], lambda f: math.cos(_number('cos: f', f))),
+        'tan': ([('f', R)], lambda f: math.tan(_number('tan: f', f))),
+        'asin': ([('f', R)], lambda f: math.asin(_number('asin: f', f, -1.0, 1.0))),
+        'acos': ([('f', R)], lambda f: math.acos(_number('acos: f', f, -1.0, 1.0))),
+        'atan': ([('f', R)], lambda f: math.atan(_number('atan: f', f))),
+        'atan2': ([('y', R), ('x', R)], lambda y, x: math.atan2(_number('atan2: y', y), _number('atan2: x', x))),
+        'pow': ([('base', R), ('exponent', R)], lambda b, e: math.pow(_number('pow: base', b),
+                                                                       _number('pow: exponent', e))),
+        'fabs': ([('f', R)], lambda f: abs(_number('fabs: f', f))),
+        'floor': ([('f', R)], lambda f: int(math.floor(_number('floor: f', f)))),
+        'ceil': ([('f', R)], lambda f: int(math.ceil(_number('ceil: f', f)))),
+        'd2r': ([('d', R)], lambda d: math.radians(_number('d2r: d', d))),
+        'r2d': ([('r', R)], lambda r: math.degrees(_number('r2d: r', r))),
+    }
+    for kind in ('integer', 'float', 'boolean'):
+        for side in ('input', 'output'):
+            table[f'read_{side}_{kind}_register'] = register(kind, side)
+        table[f'write_output_{kind}_register'] = register(kind, 'output', write=True)
+    return table

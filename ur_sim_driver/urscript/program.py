@@ -1,0 +1,247 @@
+"""A URScript program running on the simulated robot: the robot's commander while it plays, stepped by the
+simulation loop under its lock, one control period at a time.
+
+Each cycle: the time of the cycle that passed is counted (a move's time at the speed scaling factor, as the
+robot's speed slider and its own slowing scale every motion; ``sleep`` in robot time), the program runs on until it
+waits again, and the current move is sampled for the robot's servo, which keeps the joints within their limits as
+it does for ROS controllers. A runtime error stops the program where it is; the arm holds. A program that ends while
+a ``speedj`` still moves the arm stops it (``stopj`` at :data:`END_DECELERATION`).
+"""
+from __future__ import annotations
+
+from collections.abc import Callable
+
+import numpy as np
+
+from ur_sim_driver.description.analytic_ik import UrAnalyticIK, nearest_branch
+from ur_sim_driver.errors import ConfigError, ScriptError
+from ur_sim_driver.motion.trajectory import TrajectorySample
+from ur_sim_driver.physics.physics import ArmState
+from ur_sim_driver.robot.robot_state import RobotState
+from ur_sim_driver.robot.simulator import Simulator
+from ur_sim_driver.urscript.grammar import parse
+from ur_sim_driver.urscript.interpreter import Interpreter, Request, is_number
+from ur_sim_driver.urscript.moves import JointLine, Move, Servo, Speed, ToolLine
+from ur_sim_driver.urscript.values import Pose, show
+
+END_DECELERATION = 2.0  # [rad/s^2] a program that ends while the arm moves at speed stops it with this
+_DH_FROM_BASE_LINK = np.diag([-1.0, -1.0, 1.0, 1.0])  # the controller's base frame is DH frame 0
+
+
+class ScriptProgram:
+    """One program (parsed at construction: a syntax error raises ScriptError and nothing runs).
+
+    Args:
+        source: the URScript text.
+        sim, robot: the simulated robot (read and changed under the simulation lock).
+        factor: the robot's speed scaling factor now, in [0, 1].
+        log: where textmsg writes (the robot's log).
+        name: the program's name when it defines none (bare statements).
+    """
+
+    def __init__(self, source: str, sim: Simulator, robot: RobotState, factor: Callable[[], float],
+                 log: Callable[[str], None], name: str = 'unnamed') -> None:
+        self.interpreter = Interpreter(parse(source), self)
+        self.name = self.interpreter.name or name
+        self.secondary = self.interpreter.secondary
+        self.sim, self.robot, self._factor, self._log = sim, robot, factor, log
+        self.ik = UrAnalyticIK(sim.params.dh, base_pose=_DH_FROM_BASE_LINK)
+        self.error: ScriptError | None = None
+        self.finished = False  # the program has ended (and the arm was commanded to rest)
+        self._program = self.interpreter.run()
+        self._program_done = False
+        self._reply = None
+        self._move: Move | None = None
+        self._move_t = 0.0  # [s] of the current move's own (scaled) time
+        self._wait_move = False  # the statement that started the move has not returned yet
+        self._sleep = 0.0  # [s] of sleep left
+        self._synced = False  # sync() waits for the next cycle
+        self._ref: TrajectorySample | None = None
+
+    # ---- the commander ------------------------------------------------------------------------------------
+    def take_over(self, state: ArmState) -> None:
+        zero = np.zeros_like(state.q)
+        self._ref = TrajectorySample(state.q.copy(), zero, zero.copy(), 0, True)
+
+    def command(self, state: ArmState, period: float) -> tuple[TrajectorySample, np.ndarray | None]:
+        if self._ref is None:
+            self.take_over(state)
+        factor = self._factor()
+        if self._move is not None:
+            self._move_t += period * factor
+        self._sleep = max(0.0, self._sleep - period)
+        self._synced = False
+        if self._move is not None:  # where the current move is now: a move started this cycle starts there
+            q, qd, qdd = self._move.sample(self._move_t)
+            self._ref = TrajectorySample(q, qd * factor, qdd * factor * factor, 0, self._move_t >= self._move.duration)
+        if self._wait_move and self._move_t >= self._move.returns_after:
+            self._wait_move = False
+        self._run()
+        if self._move is None:
+            return self._ref, self._ref.positions
+        q, qd, qdd = self._move.sample(self._move_t)
+        ended = self._move_t >= self._move.duration
+        self._ref = TrajectorySample(q, qd * factor, qdd * factor * factor, 0, ended)
+        if ended and self._program_done:
+            self.finished = True
+        return self._ref, (q if ended else None)
+
+    def halt(self, q: np.ndarray, reason: str) -> None:
+        self._stop(ScriptError(f'the robot halted the program: {reason}'), q)
+
+    def run_now(self) -> None:
+        """Run a secondary program to its end at once (it cannot wait for robot time); its runtime error, if
+        any, is in `error`."""
+        self._run()
+
+    # ---- the program --------------------------------------------------------------------------------------
+    def _run(self) -> None:
+        while not self._program_done and not self._wait_move and self._sleep <= 0.0 and not self._synced:
+            try:
+                request = self._program.send(self._reply)
+                self._reply = None
+            except StopIteration:
+                self._end()
+                return
+            except ScriptError as exc:
+                self._stop(exc, None)
+                return
+            try:
+                self._handle(request)
+            except (ScriptError, ConfigError) as exc:  # the statement that asked: its line
+                line, column = self.interpreter.line, self.interpreter.column
+                self._stop(ScriptError(f'line {line}: {exc}', line, column), None)
+                return
+
+    def _handle(self, request: Request) -> None:
+        self.interpreter.spent_time()
+        if request.kind == 'sleep':
+            self._sleep = request.args[0]
+        elif request.kind == 'sync':
+            self._synced = True
+        else:
+            self._move = self._build(*request.args)
+            self._move_t = 0.0
+            self._wait_move = self._move.returns_after > 0.0
+
+    def _end(self) -> None:
+        self._program_done = True
+        if self._move is not None and np.isinf(self._move.duration):  # still at speed: stop the arm
+            self._move = Speed(self._ref.positions, self._nominal_qd(), np.zeros(len(self._ref.positions)),
+                               END_DECELERATION, None)
+            self._move_t = 0.0
+        elif self._move is None or self._move_t >= self._move.duration:
+            self.finished = True
+
+    def _stop(self, error: ScriptError, q: np.ndarray | None) -> None:
+        """A runtime error (or the robot's halt): the program ends here and the arm holds where it is commanded."""
+        self.error = error
+        self._program_done = True
+        self.finished = True
+        hold = self._ref.positions if q is None and self._ref is not None else q
+        if hold is not None:
+            zero = np.zeros_like(hold)
+            self._ref = TrajectorySample(np.array(hold, float), zero, zero.copy(), 0, True)
+        self._move = None
+
+    def _nominal_qd(self) -> np.ndarray:
+        if self._move is None:
+            return np.zeros(len(self._ref.positions))
+        return self._move.sample(self._move_t)[1]
+
+    # ---- moves --------------------------------------------------------------------------------------------
+    def _build(self, kind: str, *args) -> Move:
+        q0 = self._ref.positions.copy()
+        p = self.sim.params
+        if kind == 'movej':
+            target, a, v, t, _r = args
+            q1 = self._joints(kind, target, q0)
+            return JointLine(q0, q1, _positive(f'{kind}: a', a), _positive(f'{kind}: v', v), _time(kind, t))
+        if kind == 'movel':
+            target, a, v, t, _r = args
+            t1 = target.matrix() if isinstance(target, Pose) else self.ik.fk(_joints6(kind, target))
+            return ToolLine(self.ik, q0, self.ik.fk(q0), t1, _positive(f'{kind}: a', a), _positive(f'{kind}: v', v),
+                            _time(kind, t), self.sim.control_dt, p.q_min, p.q_max)
+        if kind == 'speedj':
+            qd, a, t = args
+            qd = np.array(_joints6(f'{kind}: qd', qd))
+            over = np.flatnonzero(np.abs(qd) > p.v_max)
+            if over.size:
+                j = int(over[0])
+                raise ScriptError(f'speedj: qd[{j}] = {qd[j]:g} rad/s is over the joint speed limit {p.v_max[j]:g}')
+            return Speed(q0, self._nominal_qd(), qd, _positive(f'{kind}: a', a), None if t is None else _time(kind, t))
+        if kind == 'stopj':
+            (a,) = args
+            return Speed(q0, self._nominal_qd(), np.zeros(len(q0)), _positive(f'{kind}: a', a), None)
+        if kind == 'servoj':
+            target, _a, _v, t, _lookahead, _gain = args
+            return Servo(q0, self._joints(kind, target, q0), _positive(f'{kind}: t', t))
+        raise ScriptError(f'{kind} is not supported by ur_sim')
+
+    def _joints(self, kind: str, target, q_near: np.ndarray) -> np.ndarray:
+        """Joint positions of a move's target (a pose: by IK, the solution nearest `q_near`), within the limits."""
+        q = np.array(self.inverse_kin(target, list(q_near))) if isinstance(target, Pose) else \
+            np.array(_joints6(f'{kind}: q', target))
+        p = self.sim.params
+        outside = np.flatnonzero((q < p.q_min) | (q > p.q_max))
+        if outside.size:
+            j = int(outside[0])
+            raise ScriptError(f'{kind}: target joint {j} = {q[j]:.4f} rad is outside its limits '
+                              f'[{p.q_min[j]:.4f}, {p.q_max[j]:.4f}]')
+        return q
+
+    # ---- ScriptRobot: what the program reads and sets -------------------------------------------------------
+    def joint_positions(self) -> list[float]:
+        return [float(v) for v in self.sim.state().q]
+
+    def tcp_pose(self) -> Pose:
+        return Pose.from_matrix(self.ik.fk(self.sim.state().q))
+
+    def inverse_kin(self, pose: Pose, qnear: list[float] | None) -> list[float]:
+        near = np.array(qnear if qnear is not None else self.sim.state().q, float)
+        solutions = self.ik.solve(pose.matrix())
+        if not np.any(np.all(np.isfinite(solutions), axis=1)):
+            raise ScriptError(f'get_inverse_kin: {pose} is out of reach')
+        branch, _ = nearest_branch(solutions, near)
+        q = solutions[branch]
+        q = near + (q - near + np.pi) % (2.0 * np.pi) - np.pi  # each joint's turn nearest qnear
+        return [float(v) for v in q]
+
+    def set_digital_out(self, pin: int, on: bool) -> None:
+        self.sim.io = self.sim.io.with_digital_out(pin, float(on))
+
+    def digital_out(self, pin: int) -> bool:
+        return bool(self.sim.io.digital_out[pin])
+
+    def digital_in(self, pin: int) -> bool:
+        return bool(self.sim.io.digital_in[pin])
+
+    def set_analog_out(self, pin: int, fraction: float) -> None:
+        self.sim.io = self.sim.io.with_analog_out(pin, fraction)
+
+    def set_payload(self, mass: float, cog: list[float]) -> None:
+        self.sim.set_payload(mass, np.array(cog), np.zeros(6))
+
+    def registers(self):
+        return self.robot.registers
+
+    def textmsg(self, text: str) -> None:
+        self._log(text)
+
+
+def _joints6(name: str, value) -> list[float]:
+    if not isinstance(value, list) or len(value) != 6 or not all(is_number(v) for v in value):
+        raise ScriptError(f'{name} is a list of 6 joint values; got {show(value)}')
+    return [float(v) for v in value]
+
+
+def _positive(name: str, value) -> float:
+    if not is_number(value) or not value > 0.0 or not np.isfinite(value):
+        raise ScriptError(f'{name} is a number > 0; got {show(value)}')
+    return float(value)
+
+
+def _time(kind: str, value) -> float:
+    if not is_number(value) or value < 0.0 or not np.isfinite(value):
+        raise ScriptError(f'{kind}: t is a time >= 0 [s]; got {show(value)}')
+    return float(value)

@@ -1,0 +1,62 @@
+"""URScript's values besides numbers, booleans, strings and lists: the pose ``p[x, y, z, rx, ry, rz]`` (position [m]
+and rotation vector [rad] in the robot's base frame), with the pose functions the subset offers."""
+from __future__ import annotations
+
+from dataclasses import dataclass
+
+import numpy as np
+from scipy.spatial.transform import Rotation
+
+
+@dataclass(frozen=True)
+class Pose:
+    """A URScript pose: position (3,) [m] and rotation vector (3,) [rad]."""
+
+    values: tuple[float, float, float, float, float, float]
+
+    @staticmethod
+    def from_matrix(t: np.ndarray) -> Pose:
+        rv = Rotation.from_matrix(t[:3, :3]).as_rotvec()
+        return Pose(tuple(float(v) for v in (*t[:3, 3], *rv)))
+
+    def matrix(self) -> np.ndarray:
+        """The homogeneous transform (4, 4)."""
+        t = np.eye(4)
+        t[:3, :3] = Rotation.from_rotvec(self.values[3:]).as_matrix()
+        t[:3, 3] = self.values[:3]
+        return t
+
+    def __str__(self) -> str:  # as textmsg shows a pose
+        return 'p[' + ', '.join(f'{v:.6g}' for v in self.values) + ']'
+
+
+def pose_trans(p_from: Pose, p_from_to: Pose) -> Pose:
+    """`p_from_to` seen from `p_from`, in the base frame: p_from * p_from_to."""
+    return Pose.from_matrix(p_from.matrix() @ p_from_to.matrix())
+
+
+def pose_inv(p: Pose) -> Pose:
+    return Pose.from_matrix(np.linalg.inv(p.matrix()))
+
+
+def pose_add(p_1: Pose, p_2: Pose) -> Pose:
+    """Positions added, rotations composed (p_2's after p_1's), as URScript's pose_add."""
+    r = Rotation.from_rotvec(p_2.values[3:]) * Rotation.from_rotvec(p_1.values[3:])
+    position = np.add(p_1.values[:3], p_2.values[:3])
+    return Pose(tuple(float(v) for v in (*position, *r.as_rotvec())))
+
+
+def pose_dist(p_from: Pose, p_to: Pose) -> float:
+    """[m] the distance between the two positions."""
+    return float(np.linalg.norm(np.subtract(p_from.values[:3], p_to.values[:3])))
+
+
+def show(value) -> str:
+    """A value as textmsg writes it."""
+    if isinstance(value, bool):
+        return 'True' if value else 'False'
+    if isinstance(value, list):
+        return '[' + ', '.join(show(v) for v in value) + ']'
+    if isinstance(value, float):
+        return f'{value:.6g}'
+    return str(value)
