@@ -243,3 +243,28 @@ def test_a_program_needs_the_robot_running():
     with pytest.raises(ScriptError, match='robot mode is POWER_OFF; a program needs RUNNING'):
         box.runner.submit('textmsg("x")')
     assert box.events == []
+
+
+def test_a_protective_stop_ends_the_program_and_it_is_not_resumed():
+    box = Box()
+    box.runner.submit('def slow():\n  movej([1.0, -1.2, 1.2, -1.57, -1.57, 0.0], a=0.5, v=0.3)\nend')
+    for _ in range(200):
+        box.step()
+    box.robot.protective_stop(box.sim.time, 'a test')
+    box.step()
+    assert box.runner.current is None and box.robot.program_state == STOPPED and box.robot.script is None
+    assert [(e.kind, e.name) for e in box.events][-1] == (EV_STOPPED, 'slow')
+
+
+def test_speedl_moves_the_tool_along_its_twist_until_stopl():
+    box = Box()
+    start = box.sim.tcp_pose()[0].copy()
+    box.run('''def prog():
+  speedl([0.05, 0, -0.02, 0, 0, 0], 0.5, 1.0)
+  stopl(0.5)
+end''')
+    moved = box.sim.tcp_pose()[0] - start
+    # 0.1 s ramp up (half the speed on average), 0.9 s at speed, 0.1 s ramp down
+    expected = np.array([0.05, 0.0, -0.02]) * (0.05 + 0.9 + 0.05)
+    assert np.allclose(moved, expected, atol=1e-3), moved
+    assert np.abs(box.sim.state().qd).max() < 1e-2

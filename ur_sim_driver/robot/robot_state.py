@@ -200,8 +200,7 @@ class RobotState:
         """URScript program `name` has ended: no program plays (the External Control program was replaced)."""
         if self.script == name:
             self.script = None
-            if self.program_state == PLAYING:
-                self.program_state = STOPPED
+            self.program_state = STOPPED  # also when a protective stop paused it: ur_sim does not resume it
 
     def load_program(self, filename: str) -> str | None:
         """Load a program by name or path in PROGRAM_DIR; the program is STOPPED afterwards."""

@@ -8,28 +8,17 @@ exceptions have them; the program stops there.
 """
 from __future__ import annotations
 
-import math
-from collections.abc import Callable, Generator
-from dataclasses import dataclass
+from collections.abc import Generator
 from typing import Any, Protocol
 
-import numpy as np
 from lark import Token, Tree
 
 from ur_sim_driver.errors import ScriptError
-from ur_sim_driver.urscript.values import Pose, pose_add, pose_dist, pose_inv, pose_trans, show
+from ur_sim_driver.urscript.builtins import builtins
+from ur_sim_driver.urscript.values import REQUIRED, Pose, Request, is_number, show, truth
 
 # A loop that runs this many times without spending robot time is the controller's "infinite loop" error.
 MAX_ITERATIONS_WITHOUT_TIME = 100_000
-
-
-@dataclass(frozen=True)
-class Request:
-    """What the program waits for: `kind` ('move', 'sleep', 'sync') and its arguments (a move's: its name and the
-    URScript arguments, resolved)."""
-
-    kind: str
-    args: tuple = ()
 
 
 class ScriptRobot(Protocol):
@@ -82,7 +71,7 @@ class Interpreter:
         self.functions: dict[str, Tree] = {}
         self._spinning = 0  # loop iterations since robot time was last spent
         self.line, self.column = 0, 0  # the statement running (1-based)
-        self.builtins = _builtins(self)
+        self.builtins = builtins(robot)
 
     def run(self) -> Generator[Request, None, None]:
         try:
@@ -146,12 +135,12 @@ class Interpreter:
 
     def _if(self, node: Tree, scope: dict):
         children = node.children
-        if _truth((yield from self._eval(children[0], scope))):
+        if truth((yield from self._eval(children[0], scope))):
             yield from self._block(children[1].children, scope)
             return
         for clause in children[2:]:
             if clause.data == 'elif_clause':
-                if _truth((yield from self._eval(clause.children[0], scope))):
+                if truth((yield from self._eval(clause.children[0], scope))):
                     yield from self._block(clause.children[1].children, scope)
                     return
             else:
@@ -160,7 +149,7 @@ class Interpreter:
 
     def _while(self, node: Tree, scope: dict):
         condition, body = node.children
-        while _truth((yield from self._eval(condition, scope))):
+        while truth((yield from self._eval(condition, scope))):
             self._spinning += 1
             if self._spinning > MAX_ITERATIONS_WITHOUT_TIME:
                 raise ScriptError(f'infinite loop detected: the loop on line {node.meta.line} ran '
@@ -214,14 +203,14 @@ class Interpreter:
             value = yield from self._eval(node.children[0], scope)
             return _arith('-', 0, value) if not isinstance(value, list) else [-v for v in value]
         if kind == 'not_':
-            return not _truth((yield from self._eval(node.children[0], scope)))
+            return not truth((yield from self._eval(node.children[0], scope)))
         if kind in ('and_', 'or_', 'xor_'):
-            left = _truth((yield from self._eval(node.children[0], scope)))
+            left = truth((yield from self._eval(node.children[0], scope)))
             if kind == 'and_' and not left:
                 return False
             if kind == 'or_' and left:
                 return True
-            right = _truth((yield from self._eval(node.children[1], scope)))
+            right = truth((yield from self._eval(node.children[1], scope)))
             return left != right if kind == 'xor_' else right
         if kind == 'compare':
             left = yield from self._eval(node.children[0], scope)
@@ -298,15 +287,12 @@ class Interpreter:
         return None
 
 
-_REQUIRED = object()
-
-
 def _block(definition: Tree) -> list:
     return next(c for c in definition.children if isinstance(c, Tree) and c.data == 'block').children
 
 
 def _bind(name: str, parameters: list, positional: list, keywords: dict) -> list:
-    """Arguments in parameter order; parameters are (name, default or _REQUIRED)."""
+    """Arguments in parameter order; parameters are (name, default or REQUIRED)."""
     names = [p for p, _ in parameters]
     if len(positional) > len(parameters):
         raise ScriptError(f'{name}() takes at most {len(parameters)} arguments ({", ".join(names)}); '
@@ -318,7 +304,7 @@ def _bind(name: str, parameters: list, positional: list, keywords: dict) -> list
         values[names.index(key)] = value
     for k, (param, default) in enumerate(parameters):
         if values[k] is None and k >= len(positional) and param not in keywords:
-            if default is _REQUIRED:
+            if default is REQUIRED:
                 raise ScriptError(f'{name}() needs argument {param!r} ({", ".join(names)})')
             values[k] = default
     return values
@@ -326,18 +312,6 @@ def _bind(name: str, parameters: list, positional: list, keywords: dict) -> list
 
 def _copy(value):
     return [_copy(v) for v in value] if isinstance(value, list) else value
-
-
-def is_number(v) -> bool:
-    return isinstance(v, (int, float)) and not isinstance(v, bool)
-
-
-def _truth(v) -> bool:
-    if isinstance(v, bool):
-        return v
-    if is_number(v):
-        return v != 0
-    raise ScriptError(f'a condition is a boolean or a number; got {show(v)}')
 
 
 def _compare(op: str, a, b) -> bool:
@@ -376,137 +350,3 @@ def _arith(op: str, a, b):
     return a % b
 
 
-def _number(name: str, value, low: float = -math.inf, high: float = math.inf) -> float:
-    if not is_number(value) or not math.isfinite(value):
-        raise ScriptError(f'{name} is a finite number; got {show(value)}')
-    if not low <= value <= high:
-        raise ScriptError(f'{name} = {show(value)} is outside [{low:g}, {high:g}]')
-    return float(value)
-
-
-def _integer(name: str, value, low: int, high: int) -> int:
-    if not isinstance(value, int) or isinstance(value, bool) or not low <= value <= high:
-        raise ScriptError(f'{name} is an integer in [{low}, {high}]; got {show(value)}')
-    return value
-
-
-def _vector(name: str, value, n: int = 6) -> list[float]:
-    items = value.values if isinstance(value, Pose) else value
-    if not isinstance(items, (list, tuple)) or len(items) != n or not all(is_number(v) for v in items):
-        raise ScriptError(f'{name} is a list of {n} numbers; got {show(value)}')
-    return [float(v) for v in items]
-
-
-def _pose(name: str, value) -> Pose:
-    if not isinstance(value, Pose):
-        raise ScriptError(f'{name} is a pose p[x, y, z, rx, ry, rz]; got {show(value)}')
-    return value
-
-
-def _builtins(it: Interpreter) -> dict[str, tuple[list, Callable]]:
-    """name -> ([(argument, default or _REQUIRED)], function)."""
-    robot = it.robot
-    R = _REQUIRED
-
-    def move(kind):
-        return lambda *args: Request('move', (kind, *args))
-
-    def digital(name, offset, count):
-        def set_out(n, b):
-            robot.set_digital_out(offset + _integer(f'{name}: n', n, 0, count - 1), _truth(b))
-        return set_out
-
-    def register(kind, side, write=False):
-        from ur_sim_driver.robot.registers import N_BITS, N_DOUBLES, N_INTS
-        size = {'integer': N_INTS, 'float': N_DOUBLES, 'boolean': N_BITS}[kind]
-        attr = {'integer': 'ints', 'float': 'doubles', 'boolean': 'bits'}[kind]
-        cast = {'integer': lambda v: int(_number('value', v)), 'float': lambda v: _number('value', v),
-                'boolean': _truth}[kind]
-        verb = 'write' if write else 'read'
-        label = f'{verb}_{side}_{kind}_register'
-        if write:
-            def write_register(n, value):
-                getattr(robot.registers(), f'{side}_{attr}')[_integer(f'{label}: address', n, 0, size - 1)] = \
-                    cast(value)
-            return [('address', R), ('value', R)], write_register
-        return [('address', R)], lambda n: getattr(robot.registers(), f'{side}_{attr}')[
-            _integer(f'{label}: address', n, 0, size - 1)]
-
-    def textmsg(s1, s2=''):
-        robot.textmsg(show(s1) + show(s2))
-
-    def set_analog(n, f):
-        robot.set_analog_out(_integer('set_analog_out: n', n, 0, 1), _number('set_analog_out: f', f, 0.0, 1.0))
-
-    def set_payload(m, cog=None):
-        robot.set_payload(_number('set_payload: m', m, 0.0), _vector('set_payload: cog', cog, 3) if cog is not None
-                          else [0.0, 0.0, 0.0])
-
-    def inverse_kin(x, qnear=None, maxPositionError=1e-10, maxOrientationError=1e-10, tcp=None):  # noqa: N803
-        return robot.inverse_kin(_pose('get_inverse_kin: x', x),
-                                 None if qnear is None else _vector('get_inverse_kin: qnear', qnear))
-
-    def sleep(t):
-        return Request('sleep', (_number('sleep: t', t, 0.0),))
-
-    def norm(a):
-        if isinstance(a, (list, Pose)):
-            return float(np.linalg.norm(_vector('norm: a', a, len(a.values if isinstance(a, Pose) else a))))
-        return abs(_number('norm: a', a))
-
-    table = {
-        'movej': ([('q', R), ('a', 1.4), ('v', 1.05), ('t', 0.0), ('r', 0.0)], move('movej')),
-        'movel': ([('pose', R), ('a', 1.2), ('v', 0.25), ('t', 0.0), ('r', 0.0)], move('movel')),
-        'speedj': ([('qd', R), ('a', R), ('t', None)], move('speedj')),
-        'stopj': ([('a', R)], move('stopj')),
-        'servoj': ([('q', R), ('a', 0.0), ('v', 0.0), ('t', 0.002), ('lookahead_time', 0.1), ('gain', 300.0)],
-                   move('servoj')),
-        'sleep': ([('t', R)], sleep),
-        'sync': ([], lambda: Request('sync')),
-        'textmsg': ([('s1', R), ('s2', '')], textmsg),
-        'set_digital_out': ([('n', R), ('b', R)], digital('set_digital_out', 0, 8)),
-        'set_standard_digital_out': ([('n', R), ('b', R)], digital('set_standard_digital_out', 0, 8)),
-        'set_configurable_digital_out': ([('n', R), ('b', R)], digital('set_configurable_digital_out', 8, 8)),
-        'set_tool_digital_out': ([('n', R), ('b', R)], digital('set_tool_digital_out', 16, 2)),
-        'set_analog_out': ([('n', R), ('f', R)], set_analog),
-        'set_standard_analog_out': ([('n', R), ('f', R)], set_analog),
-        'get_standard_digital_in': ([('n', R)], lambda n: robot.digital_in(_integer('n', n, 0, 7))),
-        'get_standard_digital_out': ([('n', R)], lambda n: robot.digital_out(_integer('n', n, 0, 7))),
-        'get_configurable_digital_in': ([('n', R)], lambda n: robot.digital_in(8 + _integer('n', n, 0, 7))),
-        'get_configurable_digital_out': ([('n', R)], lambda n: robot.digital_out(8 + _integer('n', n, 0, 7))),
-        'get_tool_digital_in': ([('n', R)], lambda n: robot.digital_in(16 + _integer('n', n, 0, 1))),
-        'get_tool_digital_out': ([('n', R)], lambda n: robot.digital_out(16 + _integer('n', n, 0, 1))),
-        'set_payload': ([('m', R), ('cog', None)], set_payload),
-        'get_actual_joint_positions': ([], lambda: robot.joint_positions()),
-        'get_actual_tcp_pose': ([], lambda: robot.tcp_pose()),
-        'get_inverse_kin': ([('x', R), ('qnear', None), ('maxPositionError', 1e-10),
-                             ('maxOrientationError', 1e-10), ('tcp', None)], inverse_kin),
-        'pose_trans': ([('p_from', R), ('p_from_to', R)],
-                       lambda a, b: pose_trans(_pose('pose_trans: p_from', a), _pose('pose_trans: p_from_to', b))),
-        'pose_inv': ([('p_from', R)], lambda a: pose_inv(_pose('pose_inv: p_from', a))),
-        'pose_add': ([('p_1', R), ('p_2', R)], lambda a, b: pose_add(_pose('pose_add: p_1', a),
-                                                                     _pose('pose_add: p_2', b))),
-        'pose_dist': ([('p_from', R), ('p_to', R)], lambda a, b: pose_dist(_pose('pose_dist: p_from', a),
-                                                                           _pose('pose_dist: p_to', b))),
-        'norm': ([('a', R)], norm),
-        'sqrt': ([('f', R)], lambda f: math.sqrt(_number('sqrt: f', f, 0.0))),
-        'sin': ([('f', R)], lambda f: math.sin(_number('sin: f', f))),
-        'cos': ([('f', R)], lambda f: math.cos(_number('cos: f', f))),
-        'tan': ([('f', R)], lambda f: math.tan(_number('tan: f', f))),
-        'asin': ([('f', R)], lambda f: math.asin(_number('asin: f', f, -1.0, 1.0))),
-        'acos': ([('f', R)], lambda f: math.acos(_number('acos: f', f, -1.0, 1.0))),
-        'atan': ([('f', R)], lambda f: math.atan(_number('atan: f', f))),
-        'atan2': ([('y', R), ('x', R)], lambda y, x: math.atan2(_number('atan2: y', y), _number('atan2: x', x))),
-        'pow': ([('base', R), ('exponent', R)], lambda b, e: math.pow(_number('pow: base', b),
-                                                                       _number('pow: exponent', e))),
-        'fabs': ([('f', R)], lambda f: abs(_number('fabs: f', f))),
-        'floor': ([('f', R)], lambda f: int(math.floor(_number('floor: f', f)))),
-        'ceil': ([('f', R)], lambda f: int(math.ceil(_number('ceil: f', f)))),
-        'd2r': ([('d', R)], lambda d: math.radians(_number('d2r: d', d))),
-        'r2d': ([('r', R)], lambda r: math.degrees(_number('r2d: r', r))),
-    }
-    for kind in ('integer', 'float', 'boolean'):
-        for side in ('input', 'output'):
-            table[f'read_{side}_{kind}_register'] = register(kind, side)
-        table[f'write_output_{kind}_register'] = register(kind, 'output', write=True)
-    return table

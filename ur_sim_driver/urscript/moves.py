@@ -6,8 +6,8 @@ farthest way (acceleration `a` [rad/s^2], speed `v` [rad/s]); the others scaled 
 tool along a straight line in the base frame, its orientation turning about one axis, on a trapezoidal profile of
 the way (`a` [m/s^2], `v` [m/s]; of the angle in [rad] for a pure rotation); the joints by the closed-form IK,
 on the branch the move starts in. ``speedj``: from the velocity at the start to `qd` with acceleration `a`, then
-constant; ``stopj`` is speedj to rest. ``servoj``: to `q` in time `t`, linearly. A move given a time `t` takes
-that time.
+constant; ``stopj`` is speedj to rest; ``speedl`` and ``stopl`` the same for the tool's twist (joints by the
+Jacobian). ``servoj``: to `q` in time `t`, linearly. A move given a time `t` takes that time.
 """
 from __future__ import annotations
 
@@ -171,6 +171,59 @@ class ToolLine(Move):
         q = np.array([np.interp(t, self.times, self.q[:, j]) for j in range(self.q.shape[1])])
         qd = np.array([np.interp(t, self.times, self.qd[:, j]) for j in range(self.q.shape[1])])
         return q, qd, np.zeros_like(q)
+
+
+class ToolSpeed(Move):
+    """speedl / stopl: the tool's twist (linear [m/s], angular [rad/s], base axes) from xd0 to xd1 with acceleration
+    a [m/s^2] (a_rot [rad/s^2] for the turn), then constant; the joints follow by the damped inverse of the arm's
+    Jacobian, integrated in steps of at most `dt`. Stateful: sample times must not decrease."""
+
+    def __init__(self, ik: UrAnalyticIK, q0: np.ndarray, xd0: np.ndarray, xd1: np.ndarray, a: float,
+                 a_rot: float, t: float | None, dt: float) -> None:
+        self.ik, self.dt = ik, dt
+        self.xd0, self.xd1 = np.array(xd0, float), np.array(xd1, float)
+        change = self.xd1 - self.xd0
+        self.ramp = max(float(np.linalg.norm(change[:3])) / a, float(np.linalg.norm(change[3:])) / a_rot)
+        self.duration = self.ramp if not np.any(self.xd1) else math.inf
+        self.returns_after = self.ramp if t is None or t <= 0.0 else t
+        self._t, self._q = 0.0, np.array(q0, float)
+        self._qd = self._joint_speed(self._q, self.xd0)
+
+    def twist(self, t: float) -> np.ndarray:
+        if t >= self.ramp:
+            return self.xd1.copy()
+        return self.xd0 + (self.xd1 - self.xd0) * (t / self.ramp)
+
+    def sample(self, t):
+        qd_before = self._qd
+        while self._t < t - 1e-12:
+            h = min(self.dt, t - self._t)
+            self._qd = self._joint_speed(self._q, self.twist(self._t + h / 2))
+            self._q = self._q + self._qd * h
+            self._t += h
+        qdd = (self._qd - qd_before) / self.dt if t > 0 else np.zeros_like(self._q)
+        return self._q.copy(), self._qd.copy(), qdd
+
+    def _joint_speed(self, q: np.ndarray, twist: np.ndarray) -> np.ndarray:
+        if not np.any(twist):
+            return np.zeros_like(q)
+        j = tool_jacobian(self.ik, q)
+        damping = 1e-4  # keeps the speeds finite near a singularity (the robot's servo limits them anyway)
+        return j.T @ np.linalg.solve(j @ j.T + damping * np.eye(6), twist)
+
+
+def tool_jacobian(ik: UrAnalyticIK, q: np.ndarray, step: float = 1e-7) -> np.ndarray:
+    """(6, 6) the tool's twist (linear, angular; base axes) per joint speed, by central differences of the FK."""
+    q = np.asarray(q, float)
+    shifts = np.concatenate([q + step * np.eye(len(q)), q - step * np.eye(len(q))])
+    poses = ik.fk(shifts)
+    n = len(q)
+    j = np.empty((6, n))
+    for k in range(n):
+        plus, minus = poses[k], poses[n + k]
+        j[:3, k] = (plus[:3, 3] - minus[:3, 3]) / (2 * step)
+        j[3:, k] = Rotation.from_matrix(plus[:3, :3] @ minus[:3, :3].T).as_rotvec() / (2 * step)
+    return j
 
 
 def _wrap(d: np.ndarray) -> np.ndarray:

@@ -20,9 +20,9 @@ from ur_sim_driver.physics.physics import ArmState
 from ur_sim_driver.robot.robot_state import RobotState
 from ur_sim_driver.robot.simulator import Simulator
 from ur_sim_driver.urscript.grammar import parse
-from ur_sim_driver.urscript.interpreter import Interpreter, Request, is_number
-from ur_sim_driver.urscript.moves import JointLine, Move, Servo, Speed, ToolLine
-from ur_sim_driver.urscript.values import Pose, show
+from ur_sim_driver.urscript.interpreter import Interpreter
+from ur_sim_driver.urscript.moves import JointLine, Move, Servo, Speed, ToolLine, ToolSpeed, tool_jacobian
+from ur_sim_driver.urscript.values import Pose, Request, is_number, show
 
 END_DECELERATION = 2.0  # [rad/s^2] a program that ends while the arm moves at speed stops it with this
 _DH_FROM_BASE_LINK = np.diag([-1.0, -1.0, 1.0, 1.0])  # the controller's base frame is DH frame 0
@@ -173,10 +173,23 @@ class ScriptProgram:
         if kind == 'stopj':
             (a,) = args
             return Speed(q0, self._nominal_qd(), np.zeros(len(q0)), _positive(f'{kind}: a', a), None)
+        if kind == 'speedl':
+            xd, a, t, a_rot = args
+            return ToolSpeed(self.ik, q0, self._tool_twist(), np.array(_joints6(f'{kind}: xd', xd)),
+                             _positive(f'{kind}: a', a), _positive(f'{kind}: aRot', a if a_rot is None else a_rot),
+                             None if t is None else _time(kind, t), self.sim.control_dt)
+        if kind == 'stopl':
+            a, a_rot = args
+            return ToolSpeed(self.ik, q0, self._tool_twist(), np.zeros(6), _positive(f'{kind}: a', a),
+                             _positive(f'{kind}: aRot', a if a_rot is None else a_rot), None, self.sim.control_dt)
         if kind == 'servoj':
             target, _a, _v, t, _lookahead, _gain = args
             return Servo(q0, self._joints(kind, target, q0), _positive(f'{kind}: t', t))
         raise ScriptError(f'{kind} is not supported by ur_sim')
+
+    def _tool_twist(self) -> np.ndarray:
+        """(6,) the tool's nominal twist now (linear [m/s], angular [rad/s]; base axes)."""
+        return tool_jacobian(self.ik, self._ref.positions) @ self._nominal_qd()
 
     def _joints(self, kind: str, target, q_near: np.ndarray) -> np.ndarray:
         """Joint positions of a move's target (a pose: by IK, the solution nearest `q_near`), within the limits."""

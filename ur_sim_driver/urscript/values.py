@@ -1,11 +1,14 @@
-"""URScript's values besides numbers, booleans, strings and lists: the pose ``p[x, y, z, rx, ry, rz]`` (position [m]
-and rotation vector [rad] in the robot's base frame), with the pose functions the subset offers."""
+"""URScript's values: numbers, booleans, strings, lists and the pose ``p[x, y, z, rx, ry, rz]`` (position [m] and
+rotation vector [rad] in the robot's base frame), with the pose functions, how textmsg shows a value, what counts
+as true, and the Request a program yields when it needs robot time."""
 from __future__ import annotations
 
 from dataclasses import dataclass
 
 import numpy as np
 from scipy.spatial.transform import Rotation
+
+from ur_sim_driver.errors import ScriptError
 
 
 @dataclass(frozen=True)
@@ -60,3 +63,27 @@ def show(value) -> str:
     if isinstance(value, float):
         return f'{value:.6g}'
     return str(value)
+
+
+@dataclass(frozen=True)
+class Request:
+    """What the program waits for: `kind` ('move', 'sleep', 'sync') and its arguments (a move's: its name and the
+    URScript arguments, resolved)."""
+
+    kind: str
+    args: tuple = ()
+
+
+REQUIRED = object()  # a builtin argument without a default
+
+
+def is_number(v) -> bool:
+    return isinstance(v, (int, float)) and not isinstance(v, bool)
+
+
+def truth(v) -> bool:
+    if isinstance(v, bool):
+        return v
+    if is_number(v):
+        return v != 0
+    raise ScriptError(f'a condition is a boolean or a number; got {show(v)}')
