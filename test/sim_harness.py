@@ -714,6 +714,8 @@ def running_sim(lockstep: bool | None = None, paced: bool = False, ros_args: lis
     # The dashboard's TCP port on a free port: tests run side by side (a test that needs 29999 asks for it).
     params.setdefault('dashboard_server', {'port': 0})
     params.setdefault('rtde', {'port': 0})
+    params.setdefault('primary', {'port': 0})
+    params.setdefault('secondary', {'port': 0})
     with ros_context(ros_args) as ctx:
         sim = UrSimNode(context=ctx, parameter_overrides=[_param(k, v) for k, v in _flatten(params).items()],
                         start=not (lockstep or paced))

@@ -32,6 +32,13 @@ def test_every_node_name_is_unique_and_the_gateway_serves_the_controllers_action
         expected = {f'/{NODE_NAME}', '/ur_sim', *(f'/{c}' for c in CONTROLLERS)}
         wait_still(lambda: expected <= set(_names(h.client)), what='the nodes of ur_sim and its gateway')
         ours = {f'/{n.get_name()}' for n in h.sim.nodes()} | {f'/{NODE_NAME}'}
-        names = _names(h.client)
-        twice = sorted(n for n in ours if names.count(n) > 1)
-        assert not twice, f'node names that exist more than once: {twice}'
+
+        def twice() -> list[str]:
+            names = _names(h.client)
+            return sorted(n for n in ours if names.count(n) > 1)
+        # The graph may still list a node of a process an earlier test in this domain ended (its participant's
+        # removal reaches this one later, under load seconds later); a name ur_sim itself has twice stays.
+        try:
+            wait_still(lambda: not twice(), timeout=20.0, what='each of ur_sim\'s node names once in the graph')
+        except TimeoutError:
+            pytest.fail(f'node names that exist more than once: {twice()}')

@@ -60,6 +60,11 @@ class SimConfig:
     dashboard_server_port: int = 29999
     rtde_host: str = '127.0.0.1'  # RTDE (ports/rtde_port.py): 30004 as on a UR; 0 lets the system choose
     rtde_port: int = 30004
+    # The primary and secondary interfaces (ports/primary_port.py): 30001 and 30002 as on a UR.
+    primary_host: str = '127.0.0.1'
+    primary_port: int = 30001
+    secondary_host: str = '127.0.0.1'
+    secondary_port: int = 30002
     tool: str = 'none'
     scene: str = 'empty'
     base_pose: tuple[float, ...] = (0.0, 0.0, 0.0, 0.0, 0.0, 0.0)
@@ -203,6 +208,10 @@ def sim_config_from_params(params: Mapping[str, Any]) -> SimConfig:
                                        0, 65535),
         rtde_host=_host('rtde.host', get('rtde.host', d.rtde_host)),
         rtde_port=_integer('rtde.port', get('rtde.port', d.rtde_port), 0, 65535),
+        primary_host=_host('primary.host', get('primary.host', d.primary_host)),
+        primary_port=_integer('primary.port', get('primary.port', d.primary_port), 0, 65535),
+        secondary_host=_host('secondary.host', get('secondary.host', d.secondary_host)),
+        secondary_port=_integer('secondary.port', get('secondary.port', d.secondary_port), 0, 65535),
         tool=_choice('tool', get('tool', d.tool), TOOLS),
         scene=_choice('scene', get('scene', d.scene), SCENES),
         base_pose=base_pose,
@@ -285,9 +294,9 @@ def _ros_name(parameter: str, value: Any) -> str:
 
 
 # Parameter names ur_sim reads: the configuration's fields, groups read as <group>.<name>, and rclpy's own.
-_GROUPS = ('constraints', 'speed_scaling', 'dashboard_server', 'rtde')
-_KNOWN = (set(SimConfig.__dataclass_fields__) - {'initial_scaling_factor', 'dashboard_server_host',
-                                                 'dashboard_server_port', 'rtde_host', 'rtde_port'}) | set(_GROUPS) | {
+_GROUPS = ('constraints', 'speed_scaling', 'dashboard_server', 'rtde', 'primary', 'secondary')
+_GROUPED = {f'{g}_{n}' for g in ('dashboard_server', 'rtde', 'primary', 'secondary') for n in ('host', 'port')}
+_KNOWN = (set(SimConfig.__dataclass_fields__) - {'initial_scaling_factor'} - _GROUPED) | set(_GROUPS) | {
     'use_sim_time', 'start_type_description_service'}
 PARAMETER_NAMES = ', '.join(sorted(f'{n}.*' if n in _GROUPS else n for n in _KNOWN))
 

@@ -54,6 +54,7 @@ from ur_sim_driver.motion.jtc import TrajectoryController
 from ur_sim_driver.motion.tolerances import default_tolerances
 from ur_sim_driver.physics.physics import ArmState
 from ur_sim_driver.ports.dashboard_port import DashboardPort
+from ur_sim_driver.ports.primary_port import PrimaryPort
 from ur_sim_driver.ports.rtde_port import RtdePort
 from ur_sim_driver.ports.tcp_port import PortError
 from ur_sim_driver.robot.dashboard_server import DashboardServer
@@ -187,6 +188,12 @@ class UrSimNode(Node):
             self.get_logger().info))
         self.rtde_port = self._open_port('RTDE', 'rtde.port', lambda: RtdePort(
             cfg.rtde_host, cfg.rtde_port, self.host, self.sim.control_rate, self.get_logger().info))
+        self.primary_ports = [port for port in (
+            self._open_port('primary interface', 'primary.port', lambda: PrimaryPort(
+                cfg.primary_host, cfg.primary_port, self.host, log=self.get_logger().info)),
+            self._open_port('secondary interface', 'secondary.port', lambda: PrimaryPort(
+                cfg.secondary_host, cfg.secondary_port, self.host, secondary=True, log=self.get_logger().info)))
+            if port is not None]
         self._thread = threading.Thread(target=self._run, name='ur_sim_loop', daemon=True)
         if start:
             self._thread.start()
@@ -355,6 +362,8 @@ class UrSimNode(Node):
         self._publish(cycle)
         if self.rtde_port is not None:
             self.rtde_port.tick()
+        for port in self.primary_ports:
+            port.tick()
         if cause is not None:
             self.get_logger().error(f'PROTECTIVE_STOP: {cause}')
         self._cycle += 1
@@ -398,7 +407,7 @@ class UrSimNode(Node):
         self._stop.set()
         if self._thread.is_alive():
             self._thread.join(timeout=5.0)
-        for port in (self.dashboard_port, self.rtde_port):
+        for port in (self.dashboard_port, self.rtde_port, *self.primary_ports):
             if port is not None:
                 port.close()
         self.gateway.close()
