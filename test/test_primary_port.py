@@ -14,6 +14,7 @@ import threading
 
 import numpy as np
 import pytest
+from port_helpers import recv_exactly
 from sim_harness import running_sim, wait_for, wait_still
 
 from ur_sim_driver.ports import primary_messages as pm
@@ -96,12 +97,7 @@ class Client:
         self.sock.connect(address)
 
     def _read(self, n: int) -> bytes:
-        data = b''
-        while len(data) < n:
-            chunk = self.sock.recv(n - len(data))
-            assert chunk, 'the server closed the connection'
-            data += chunk
-        return data
+        return recv_exactly(self.sock, n)
 
     def package(self) -> tuple[int, bytes]:
         size, kind = struct.unpack('>iB', self._read(5))

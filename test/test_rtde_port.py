@@ -13,6 +13,7 @@ from pathlib import Path
 
 import numpy as np
 import pytest
+from port_helpers import recv_exactly
 from scipy.spatial.transform import Rotation
 from sim_harness import point, running_sim, wait_for, wait_still
 
@@ -32,12 +33,7 @@ class RtdeClient:
         self.sock.close()
 
     def _read(self, n: int) -> bytes:
-        data = b''
-        while len(data) < n:
-            chunk = self.sock.recv(n - len(data))
-            assert chunk, 'the server closed the connection'
-            data += chunk
-        return data
+        return recv_exactly(self.sock, n)
 
     def receive(self) -> tuple[int, bytes]:
         size, kind = struct.unpack('>HB', self._read(3))
