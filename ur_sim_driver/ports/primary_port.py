@@ -187,19 +187,22 @@ class PrimaryPort:
     def execute(self, text: str) -> None:
         """Run a complete program (or carry out a controller command) from a client."""
         command = COMMANDS.get(' '.join(text.split()).lower())
-        with self.host.lock:
-            if command is not None:
+        if command is not None:
+            with self.host.lock:
                 refusal = command(self.host.robot)
-                if refusal:
-                    self.log(f'{self.what}: {text.strip()!r} refused: {refusal}')
-                return
-            if self.host.scripts is None:
-                self.log(f'{self.what}: no program slot; program ignored')
-                return
-            try:
-                self.host.scripts.submit(text)
-            except ScriptError as exc:
-                self.log(f'{self.what}: program refused: {exc}')
+            if refusal:
+                self.log(f'{self.what}: {text.strip()!r} refused: {refusal}')
+            return
+        if self.host.scripts is None:
+            self.log(f'{self.what}: no program slot; program ignored')
+            return
+        try:
+            program = self.host.scripts.compile(text)  # outside the lock: parsing takes time
+            with self.host.lock:
+                self.host.scripts.start(program)
+        except ScriptError as exc:
+            self.log(f'{self.what}: program refused: {exc}')
+            with self.host.lock:  # the lock the loop's events come under: one order of messages for the clients
                 self._on_event(ScriptEvent(RUNTIME_ERROR, '', str(exc), exc.line, exc.column))
 
     def _on_event(self, event: ScriptEvent) -> None:

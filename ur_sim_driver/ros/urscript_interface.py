@@ -122,8 +122,9 @@ class URScriptInterface(Component):
             logger.error('Script interface is executing action, ignoring topic')
             return
         try:
+            program = self.host.scripts.compile(msg.data)  # outside the lock: parsing takes time
             with self.host.lock:
-                self.host.scripts.submit(msg.data)
+                self.host.scripts.start(program)
         except ScriptError as exc:
             logger.error(f'Could not send program to robot: {exc}')
             return
@@ -158,14 +159,19 @@ class URScriptInterface(Component):
             run = _Run(name)
             with self.host.lock:
                 self._refuse_unless_running()
+            try:
+                program = self.host.scripts.compile(code, name)  # outside the lock: parsing takes time
+            except ScriptError as exc:  # does not compile: the controller reports it as a runtime exception
+                raise ScriptError(runtime_error_text(ScriptEvent(RUNTIME_ERROR, name, str(exc), exc.line,
+                                                                 exc.column), code)) from None
+            with self.host.lock:
                 undo = self.host.scripts.listen(run.on_event)
                 self._run = run  # executing: a cancel from here on stops the program
                 try:
-                    self.host.scripts.submit(code, name)
-                except ScriptError as exc:  # does not compile: the controller reports it as a runtime exception
+                    self.host.scripts.start(program)
+                except ScriptError:
                     undo()
-                    raise ScriptError(runtime_error_text(ScriptEvent(RUNTIME_ERROR, name, str(exc), exc.line,
-                                                                     exc.column), code)) from None
+                    raise
         except ScriptError as exc:
             logger.error(f'Script did not execute successfully. Error message:\n{exc}')
             goal_handle.abort()

@@ -47,10 +47,18 @@ class ScriptRunner:
         self._listeners.append(callback)
         return lambda: self._listeners.remove(callback) if callback in self._listeners else None
 
+    def compile(self, source: str, name: str = 'unnamed') -> ScriptProgram:
+        """Parse `source` into a program of this robot, ready to start; ScriptError when it does not compile. Needs
+        no lock: parsing a long program must not hold up the control loop."""
+        return ScriptProgram(source, self.sim, self.robot, self._factor, self._text, name)
+
     def submit(self, source: str, name: str = 'unnamed') -> ScriptProgram:
-        """Compile `source` and start it (a sec program runs to its end now). ScriptError: it does not compile,
-        or the robot cannot run a program now; nothing runs then."""
-        program = ScriptProgram(source, self.sim, self.robot, self._factor, self._text, name)
+        """compile() and start() in one (under the lock)."""
+        return self.start(self.compile(source, name))
+
+    def start(self, program: ScriptProgram) -> ScriptProgram:
+        """Start a compiled program (a sec program runs to its end now). ScriptError: the robot cannot run a program
+        now; nothing runs then."""
         if program.secondary:
             program.run_now()
             if program.error is not None:
