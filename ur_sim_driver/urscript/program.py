@@ -57,6 +57,7 @@ class ScriptProgram:
         self._sleep = 0.0  # [s] of sleep left
         self._synced = False  # sync() waits for the next cycle
         self._ref: TrajectorySample | None = None
+        self._qd_nominal: np.ndarray | None = None  # the current move's velocity this cycle [rad/s]
 
     # ---- the commander ------------------------------------------------------------------------------------
     def take_over(self, state: ArmState) -> None:
@@ -67,24 +68,29 @@ class ScriptProgram:
         if self._ref is None:
             self.take_over(state)
         factor = self._factor()
-        if self._move is not None:
+        current = self._move
+        if current is not None:  # where the current move is now: a move the program starts this cycle starts there
             self._move_t += period * factor
+            self._sample(factor)
         self._sleep = max(0.0, self._sleep - period)
         self._synced = False
-        if self._move is not None:  # where the current move is now: a move started this cycle starts there
-            q, qd, qdd = self._move.sample(self._move_t)
-            self._ref = TrajectorySample(q, qd * factor, qdd * factor * factor, 0, self._move_t >= self._move.duration)
         if self._wait_move and self._move_t >= self._move.returns_after:
             self._wait_move = False
         self._run()
         if self._move is None:
             return self._ref, self._ref.positions
-        q, qd, qdd = self._move.sample(self._move_t)
-        ended = self._move_t >= self._move.duration
-        self._ref = TrajectorySample(q, qd * factor, qdd * factor * factor, 0, ended)
+        if self._move is not current:  # started this cycle: its first sample
+            self._sample(factor)
+        ended = self._ref.ended
         if ended and self._program_done:
             self.finished = True
-        return self._ref, (q if ended else None)
+        return self._ref, (self._ref.positions if ended else None)
+
+    def _sample(self, factor: float) -> None:
+        """The reference from the current move at its time; its nominal (unscaled) velocity kept for the next."""
+        q, qd, qdd = self._move.sample(self._move_t)
+        self._qd_nominal = qd
+        self._ref = TrajectorySample(q, qd * factor, qdd * factor * factor, 0, self._move_t >= self._move.duration)
 
     def halt(self, q: np.ndarray, reason: str) -> None:
         self._stop(ScriptError(f'the robot halted the program: {reason}'), q)
@@ -122,6 +128,7 @@ class ScriptProgram:
         else:
             self._move = self._build(*request.args)
             self._move_t = 0.0
+            self._qd_nominal = self._move.sample(0.0)[1]  # a move built next in this same cycle starts from it
             self._wait_move = self._move.returns_after > 0.0
 
     def _end(self) -> None:
@@ -145,9 +152,10 @@ class ScriptProgram:
         self._move = None
 
     def _nominal_qd(self) -> np.ndarray:
+        """(n,) the current move's velocity this cycle [rad/s], before speed scaling (sampled once per cycle)."""
         if self._move is None:
             return np.zeros(len(self._ref.positions))
-        return self._move.sample(self._move_t)[1]
+        return self._qd_nominal
 
     # ---- moves --------------------------------------------------------------------------------------------
     def _build(self, kind: str, *args) -> Move:
