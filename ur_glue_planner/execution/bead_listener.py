@@ -8,6 +8,7 @@ message helper, not the simulator).
 """
 from __future__ import annotations
 
+import threading
 from dataclasses import dataclass
 
 import numpy as np
@@ -54,6 +55,7 @@ class BeadListener:
     """Keeps the newest bead cloud and clears the simulated bead on request."""
 
     def __init__(self, node: Node) -> None:
+        self._node = node
         self._msg: PointCloud2 | None = None
         self._count = 0
         latched = QoSProfile(depth=1, durability=DurabilityPolicy.TRANSIENT_LOCAL)
@@ -82,3 +84,28 @@ class BeadListener:
     def bead(self) -> BeadPoints | None:
         """The newest bead received, or None."""
         return None if self._msg is None else bead_from_cloud(self._msg)
+
+    def final(self, timeout: float = 10.0) -> BeadPoints:
+        """The bead as the simulator holds it now, once the flow has ended.
+
+        The newest message received so far may not be the newest published: the whole-bead cloud is large and
+        can arrive after a later, small joint state. A new subscription is given the publisher's latched
+        (newest) message, so this is the last bead published before the call, whatever the delivery delays.
+        Raises ClientError when nothing arrives within ``timeout`` [s] of wall time (a hang guard).
+        """
+        got: list[PointCloud2] = []
+        arrived = threading.Event()
+
+        def first(msg: PointCloud2) -> None:
+            if not got:
+                got.append(msg)
+                arrived.set()
+
+        latched = QoSProfile(depth=1, durability=DurabilityPolicy.TRANSIENT_LOCAL)
+        sub = self._node.create_subscription(PointCloud2, BEAD_TOPIC, first, latched)
+        try:
+            if not arrived.wait(timeout):
+                raise ClientError(f'no bead on {BEAD_TOPIC} within {timeout} s')
+        finally:
+            self._node.destroy_subscription(sub)
+        return bead_from_cloud(got[0])

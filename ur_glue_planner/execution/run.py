@@ -19,6 +19,7 @@ from ur_glue_planner.report.glue_report import Executed
 #: ``on_progress(segment name, fraction of its duration done, max joint tracking error [rad])``.
 Progress = Callable[[str, float, float], None]
 
+FLOW_FALL = 7.0  # time constants from the flow's fall to below 0.1 % of its rate
 BEAD_DELIVERY = 1.0  # [s] of wall time allowed at least for the bead goal to reach the controller before it starts
 RECORD_RATE = 50.0  # [Hz] nominal; the report uses every message received (exact stamps)
 MESSAGES = {
@@ -143,11 +144,14 @@ def execute(ur: URClient, plan: GluePlan, stop: threading.Event, log: Callable[[
                     gun.off(plan.dispense.pin)
                     ur.sleep(0.05)  # the off state reaches io_states
                     switches = tuple(gun.collect()) + tuple(gun.changes)
-                # the gun's off delay and its flow's fall: the bead grows for a moment after the switch
-                ur.sleep(0.2 + (job.dispenser.off_delay + 5.0 * job.dispenser.time_constant if gun else 0.0))
+                # the gun's off delay and its flow's fall: the bead grows for a moment after the switch, until the
+                # flow is below 0.1 % of its rate (ur_sim's idle: ln(1000) < 7 time constants) and ur_sim
+                # publishes the bead's last message
+                fall = FLOW_FALL * job.dispenser.time_constant
+                ur.sleep(0.2 + (job.dispenser.off_delay + fall if gun else 0.0))
                 rec = ur.stop_recording(recorder, raw=True)
                 recorder = None
-                deposit = bead.bead() if bead is not None else None
+                deposit = bead.final() if bead is not None else None
                 run = Executed(rec.t, rec.q, rec.qd)
             if not outcome.succeeded:
                 log(f'{seg.name} failed: {describe(outcome)}')
