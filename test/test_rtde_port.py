@@ -171,11 +171,34 @@ def test_the_target_tcp_is_where_the_setpoint_puts_it(h):
     assert moving >= 5
 
 
+def test_joint_modes_elbow_and_raw_wrench_are_filled_and_what_is_not_simulated_is_nan(h):
+    client = _connect(h)
+    try:
+        names = ['joint_mode', 'elbow_position', 'elbow_velocity', 'ft_raw_wrench', 'actual_current',
+                 'actual_main_voltage', 'actual_tool_accelerometer']
+        recipe, types = client.outputs(500.0, names)
+        assert recipe == 1 and 'NOT_FOUND' not in types
+        assert client.request(ord('S')) == b'\x01'
+        _cycles(h, 2)
+        modes, elbow, elbow_v, raw, current, voltage, accelerometer = _unpack(types, client.data()[1])
+        assert list(modes) == [253] * 6  # RUNNING, as the robot mode
+        with h.sim.host.lock:  # the forearm link's origin in the base frame, from MuJoCo directly
+            d, physics = h.sim.sim.physics.data, h.sim.sim.physics
+            forearm, base = physics.body_id('forearm_link'), physics.body_id('base')
+            expected = d.xmat[base].reshape(3, 3).T @ (d.xpos[forearm] - d.xpos[base])
+        assert np.allclose(elbow, expected, atol=1e-3) and np.linalg.norm(elbow) > 0.3  # the arm holds still
+        assert np.allclose(elbow_v, 0.0, atol=1e-3)
+        assert np.isfinite(raw).all()
+        assert np.isnan(current).all() and np.isnan(voltage) and np.isnan(accelerometer).all()
+    finally:
+        client.close()
+
+
 def test_unknown_names_answer_not_found_and_a_held_input_in_use(h):
     first, second = _connect(h), _connect(h)
     try:
-        recipe, types = first.outputs(500.0, ['actual_q', 'no_such_variable', 'actual_current'])
-        assert recipe == 0 and types == ['VECTOR6D', 'NOT_FOUND', 'NOT_FOUND']  # currents are not simulated
+        recipe, types = first.outputs(500.0, ['actual_q', 'no_such_variable', 'euromap67_input_bits'])
+        assert recipe == 0 and types == ['VECTOR6D', 'NOT_FOUND', 'NOT_FOUND']  # a Euromap67 interface is not
         recipe, types = first.outputs(1000.0, ['actual_q'])  # above the robot's 500 Hz
         assert recipe == 0
         assert first.inputs(['input_int_register_24'])[0] == 1

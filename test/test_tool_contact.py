@@ -21,8 +21,8 @@ from ur_glue_planner.motion.plan import plan_job
 from ur_glue_planner.motion.touch import touch_move
 from ur_glue_planner.motion.ur_arm_kinematics import ur_kinematics
 from ur_glue_planner.scene.waypoints import tool_axis
-from ur_sim_driver.controllers.tool_contact import tool_bodies
 from ur_sim_driver.motion import result_codes as rc
+from ur_sim_driver.physics.tool_contact import tool_bodies
 from ur_sim_driver.robot.robot_state import NORMAL, PROTECTIVE_STOP
 
 NAME = 'tool_contact_controller'

@@ -28,11 +28,10 @@ from ur_msgs.action import ToolContact
 from ur_sim_driver.controllers.base import Component, Host
 from ur_sim_driver.controllers.ur_hardware import TOOL_CONTACT
 from ur_sim_driver.physics.physics import Contact
+from ur_sim_driver.physics.tool_contact import TOOL_CONTACT_FORCE, strongest_touch
 from ur_sim_driver.robot.sim_config import SimConfig
 
 TYPE = 'ur_controllers/ToolContactController'
-TOOL_CONTACT_FORCE = 2.0  # [N] contact force at the tool or flange that counts as a tool contact
-FLANGE_LINK = 'wrist_3_link'
 # Upstream's log lines.
 INACTIVE = 'Tool contact controller is not in active state, can not accept action goals.'
 BUSY = 'Tool contact already active, rejecting goal.'
@@ -74,8 +73,8 @@ class ToolContactController(Component):
     def on_configure(self, host: Host, node: Node) -> None:
         if host.sim.params.series == 'cb3':
             self.unavailable = CB3
-        self._tool_bodies = tool_bodies(host.sim.physics.model, f'{host.cfg.tf_prefix}{FLANGE_LINK}')
-        self._threshold = min(TOOL_CONTACT_FORCE, 0.5 * host.cfg.protective_stop_force)
+        self._tool_bodies = host.sim.tool_bodies
+        self._threshold = host.sim.tool_contact_force
         self._server = ActionServer(
             node, ToolContact, host.cfg.prefixed(f'{self.name}/detect_tool_contact'), execute_callback=self._execute,
             goal_callback=self._on_goal, cancel_callback=self._on_cancel, callback_group=ReentrantCallbackGroup())
@@ -91,10 +90,9 @@ class ToolContactController(Component):
         """After a physics step at time `t` [s]: why the robot cancels its motion now (a tool contact), or None."""
         if not self.watching:
             return None
-        touching = [c for c in contacts if c.robot_part in self._tool_bodies and c.force > self._threshold]
-        if not touching:
+        c = strongest_touch(contacts, self._tool_bodies, self._threshold)
+        if c is None:
             return None
-        c = max(touching, key=lambda c: c.force)
         self.last_contact = (t, c)
         self._end(SUCCEEDED)
         return (f'tool contact: {c.robot_part} touched {c.other} ({c.force:.1f} N > {self._threshold:.1f} N); '
@@ -158,20 +156,3 @@ class ToolContactController(Component):
         else:
             goal_handle.abort()
         return ToolContact.Result()
-
-
-def tool_bodies(model, flange: str) -> frozenset[str]:
-    """Names of the bodies in the subtree of body `flange` (flange, tool, payload) of a MuJoCo model."""
-    import mujoco
-
-    root = mujoco.mj_name2id(model, mujoco.mjtObj.mjOBJ_BODY, flange)
-    if root < 0:
-        return frozenset()
-    names = set()
-    for b in range(model.nbody):
-        a = b
-        while a > 0 and a != root:
-            a = int(model.body_parentid[a])
-        if a == root:
-            names.add(mujoco.mj_id2name(model, mujoco.mjtObj.mjOBJ_BODY, b))
-    return frozenset(names)

@@ -279,6 +279,13 @@ class ArmPhysics:
         angular, linear = self._velocity6[:3], self._velocity6[3:]
         return np.concatenate((r_base.T @ linear, r_base.T @ angular))
 
+    def body_motion(self, body: int) -> tuple[np.ndarray, np.ndarray]:
+        """The origin of body `body` (a MuJoCo id) now: position (3,) [m] and linear velocity (3,) [m/s], base frame."""
+        d = self.data
+        r_base = d.xmat[self._base].reshape(3, 3)
+        mujoco.mj_objectVelocity(self.model, d, mujoco.mjtObj.mjOBJ_BODY, body, self._velocity6, 0)
+        return r_base.T @ (d.xpos[body] - d.xpos[self._base]), r_base.T @ self._velocity6[3:]
+
     def wrench(self) -> np.ndarray:
         """(6,) force [N] and torque [N m] that the bodies beyond tool0 (tool, payload) exert on the arm,
         about the tool0 origin, in tool0 axes, averaged over the last control period's physics steps.

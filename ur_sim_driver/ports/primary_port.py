@@ -1,9 +1,11 @@
-"""The primary and secondary interfaces on their TCP ports (30001 and 30002 on a UR): the robot's state for every
-client, its messages for primary clients, and URScript from either, as a UR controller serves them.
+"""The primary, secondary and real-time interfaces on their TCP ports (30001, 30002 and 30003 on a UR): the robot's
+state for every client, its messages for primary clients, and URScript from any, as a UR controller serves them.
 
-Per connection: the version message first (``primary_messages.version_message``, the robot's software version),
-then a ROBOT_STATE package every 100 ms of simulated time (RobotModeData, MasterboardData, KinematicsInfo and
-ConfigurationData). A primary client also gets the program slot's events as robot messages: KEY messages
+Per primary or secondary connection: the version message first (``primary_messages.version_message``, the robot's
+software version), then a ROBOT_STATE package every 100 ms of simulated time (RobotModeData, MasterboardData,
+KinematicsInfo and ConfigurationData). A real-time connection gets a package every control cycle
+(``realtime_messages.py``: 500 Hz on e-Series, 125 Hz on CB3), from the first cycle after it connects.
+A primary client also gets the program slot's events as robot messages: KEY messages
 ``PROGRAM_XXX_STARTED`` / ``PROGRAM_XXX_STOPPED`` with the program's name, RUNTIME_EXCEPTION with the line and column,
 and TEXT for a program's ``textmsg``.
 
@@ -30,11 +32,13 @@ from collections.abc import Callable
 from ur_sim_driver.controllers.base import Host
 from ur_sim_driver.errors import ScriptError
 from ur_sim_driver.ports import primary_messages as pm
+from ur_sim_driver.ports.realtime_messages import realtime_package
 from ur_sim_driver.ports.tcp_port import TcpPort
 from ur_sim_driver.robot.robot_state import RobotState
 from ur_sim_driver.robot.software import SoftwareVersion, parse_version
 from ur_sim_driver.urscript.runner import RUNTIME_ERROR, STARTED, STOPPED, TEXT, ScriptEvent
 
+PRIMARY, SECONDARY, REALTIME = 'primary', 'secondary', 'real-time'
 PERIOD = 0.1  # [s] of simulated time between robot state packages (10 Hz)
 BACKLOG = 1000  # packages queued per connection
 MAX_SCRIPT = 1024 * 1024  # [bytes] of one program (or one line) still incomplete
@@ -112,11 +116,13 @@ def software_version(host: Host) -> SoftwareVersion:
 
 
 class PrimaryPort:
-    """The primary interface (or with `secondary`, the secondary one) on `address`:`port` (0: a free port), for the
-    robot of `host`.
+    """The primary interface (or the secondary or real-time one) on `address`:`port` (0: a free port), for the robot
+    of `host`.
 
     Args:
-        secondary: robot state only: no robot messages after the version message (URScript is still run).
+        kind: PRIMARY; SECONDARY: robot state only, no robot messages after the version message; REALTIME: the
+            real-time package every control cycle, no version message and no robot messages. URScript is run from
+            every kind.
         backlog: packages queued per connection before the oldest are dropped.
         log: called with a line for the log (programs refused, connections closed for bad input).
 
@@ -124,10 +130,12 @@ class PrimaryPort:
         PortError: the address cannot be listened on.
     """
 
-    def __init__(self, address: str, port: int, host: Host, secondary: bool = False, backlog: int = BACKLOG,
+    def __init__(self, address: str, port: int, host: Host, kind: str = PRIMARY, backlog: int = BACKLOG,
                  log: Callable[[str], None] = lambda _: None) -> None:
-        self.host, self.secondary, self.backlog, self.log = host, secondary, backlog, log
-        self.what = 'secondary interface' if secondary else 'primary interface'
+        if kind not in (PRIMARY, SECONDARY, REALTIME):
+            raise ValueError(f'interface kind {kind!r}: one of {PRIMARY!r}, {SECONDARY!r}, {REALTIME!r}')
+        self.host, self.kind, self.backlog, self.log = host, kind, backlog, log
+        self.what = f'{kind} interface'
         self.version = software_version(host)
         params = host.sim.params
         self._static = pm.kinematics_info(params) + pm.configuration_data(params, self.version)
@@ -135,7 +143,7 @@ class PrimaryPort:
         self._clients_lock = threading.Lock()
         self._next = 0  # index of the next 100 ms period whose state is due
         self._unlisten: Callable[[], None] | None = None
-        if not secondary and host.scripts is not None:
+        if kind == PRIMARY and host.scripts is not None:
             with host.lock:
                 self._unlisten = host.scripts.listen(self._on_event)
         self._port = TcpPort(self.what, address, port, lambda sock: _Client(self, sock).run())
@@ -156,7 +164,15 @@ class PrimaryPort:
 
     def tick(self) -> None:
         """After a control cycle (simulation loop, outside the lock): the robot state is queued for every client
-        when a new 100 ms period of simulated time has begun."""
+        when a new 100 ms period of simulated time has begun (real-time: every cycle)."""
+        if self.kind == REALTIME:
+            clients = self._clients
+            if clients:
+                with self.host.lock:
+                    package = realtime_package(self.host, self.version)
+                for client in clients:
+                    client.queue(package)
+            return
         period = math.floor(self.host.sim.time / PERIOD + 1e-6)
         if period < self._next:
             return
@@ -207,7 +223,7 @@ class PrimaryPort:
 
     def _on_event(self, event: ScriptEvent) -> None:
         """Under the simulation lock: a program slot event as a robot message to every primary client."""
-        if self.secondary:
+        if self.kind != PRIMARY:
             return
         t = self.host.sim.time
         if event.kind in (STARTED, STOPPED):
@@ -235,9 +251,10 @@ class _Client:
         sender = threading.Thread(target=self._send, name=self.port.what.replace(' ', '_') + '_sender', daemon=True)
         try:
             _configure(self.sock)
-            with self.port.host.lock:
-                version = pm.version_message(self.port.version, self.port.host.sim.time)
-            self.queue(version)
+            if self.port.kind != REALTIME:
+                with self.port.host.lock:
+                    version = pm.version_message(self.port.version, self.port.host.sim.time)
+                self.queue(version)
             self.port.attach(self, True)
             sender.start()
             self._receive()
@@ -296,6 +313,7 @@ def _configure(sock: socket.socket) -> None:
     """A bounded send buffer, keepalive probes and a user timeout (where the system has them)."""
     sock.setsockopt(socket.SOL_SOCKET, socket.SO_SNDBUF, SEND_BUFFER)
     sock.setsockopt(socket.SOL_SOCKET, socket.SO_KEEPALIVE, 1)
+    sock.setsockopt(socket.IPPROTO_TCP, socket.TCP_NODELAY, 1)  # a package per send: clients that recv one each
     for name, value in zip(('TCP_KEEPIDLE', 'TCP_KEEPINTVL', 'TCP_KEEPCNT'), KEEPALIVE):
         if hasattr(socket, name):
             sock.setsockopt(socket.IPPROTO_TCP, getattr(socket, name), value)

@@ -2,10 +2,12 @@
 
 Output variables are read under the simulation lock, from the same objects the ROS side reads: the arm (joint
 state, servo setpoint, TCP pose, wrench, payload), the robot's modes and program state, the IO bank, the speed
-scaling and the registers. A variable the simulation cannot fill honestly (currents, voltages, temperatures, joint
-modes, Euromap67, ...) is answered ``NOT_FOUND`` at set-up, as the robot answers a name it does not know: a client
-learns at once what it does not get. Input variables change the robot as the driver's services do: an output set
-here shows on ``/io_and_status_controller/io_states``, and the other way round.
+scaling and the registers. The electrical and thermal values a UR reports (currents, voltages, temperatures, the
+controller's execution time) and the tool accelerometer and momentum are not simulated: they are NaN, a value no
+client can take for a measurement, so that clients that ask for them (ur_rtde's RTDEReceiveInterface asks for
+every variable by default) still run. Any other variable ur_sim does not fill (Euromap67, ...) is answered
+``NOT_FOUND`` at set-up, as the robot answers a name it does not know. Input variables change the robot as the
+driver's services do: an output set here shows on ``/io_and_status_controller/io_states``, and the other way round.
 
 Frames and units as the RTDE guide gives them: poses ``[x, y, z, rx, ry, rz]`` in the base frame (rotation
 vector), ``actual_TCP_force`` in the base frame about the TCP, joint values in rad, rad/s, rad/s^2 and N m. The TCP
@@ -32,6 +34,8 @@ from ur_sim_driver.robot.robot_state import (
 )
 from ur_sim_driver.robot.speed_scaling import SLIDER_MAX, SLIDER_MIN
 
+NAN = float('nan')  # a value ur_sim does not simulate
+NAN6 = (NAN,) * 6
 RUNTIME_STATE = {'STOPPED': 1, PLAYING: 2, PAUSED: 4}  # stopping 0, pausing 3, resuming 5: transitions are instant
 _STOPPED_BY_SAFETY = (PROTECTIVE_STOP, 5, SYSTEM_EMERGENCY_STOP, ROBOT_EMERGENCY_STOP, 8, 9)  # bit 10
 
@@ -68,6 +72,21 @@ def _target_tcp(host: Host) -> tuple[tuple[float, ...], tuple[float, ...]]:
     """(target_TCP_pose, target_TCP_speed): the TCP where the servo's setpoint puts it, and its twist."""
     position, rotation, twist = host.sim.physics.tcp_at(np.array(_target(host, 0)), np.array(_target(host, 1)))
     return _vec(np.concatenate((position, Rotation.from_matrix(rotation).as_rotvec()))), _vec(twist)
+
+
+def _elbow(host: Host) -> tuple[tuple[float, ...], tuple[float, ...]]:
+    """The elbow (the forearm link's origin, on the elbow joint's axis): position [m] and velocity [m/s], base frame."""
+    body = host.sim.physics.body_id(host.cfg.tf_prefix + 'forearm_link')
+    if body is None:
+        return (NAN,) * 3, (NAN,) * 3
+    position, velocity = host.sim.physics.body_motion(body)
+    return _vec(position), _vec(velocity)
+
+
+def joint_mode(robot_mode: int) -> int:
+    """The joints' mode for a robot mode: 253 RUNNING, 255 IDLE (powered, brakes on), 238 BACKDRIVE, 247 BOOTING,
+    239 POWER_OFF."""
+    return {7: 253, 4: 255, 5: 255, 6: 238, 2: 247}.get(robot_mode, 239)
 
 
 def _safety_bits(mode: int) -> int:
@@ -124,6 +143,14 @@ READERS: dict[str, Callable[[Host], object]] = {
     'payload': lambda h: h.sim.payload.mass, 'payload_cog': lambda h: _vec(h.sim.payload.cog),
     'payload_inertia': lambda h: _vec(h.sim.payload.inertia),
     'script_control_line': lambda h: 0,
+    'elbow_position': lambda h: _elbow(h)[0], 'elbow_velocity': lambda h: _elbow(h)[1],
+    'joint_mode': lambda h: (joint_mode(h.robot.robot_mode),) * 6,
+    'ft_raw_wrench': lambda h: _vec(h.sim.physics.wrench()),  # neither zeroed nor payload-compensated; tool0 axes
+    **{name: (lambda h: NAN6) for name in ('target_current', 'actual_current', 'joint_control_output',
+                                            'joint_temperatures', 'actual_joint_voltage')},
+    **{name: (lambda h: NAN) for name in ('actual_execution_time', 'actual_momentum', 'actual_main_voltage',
+                                           'actual_robot_voltage', 'actual_robot_current')},
+    'actual_tool_accelerometer': lambda h: (NAN,) * 3,
     **_register_readers(),
 }
 

@@ -65,6 +65,8 @@ class SimConfig:
     primary_port: int = 30001
     secondary_host: str = '127.0.0.1'
     secondary_port: int = 30002
+    realtime_host: str = '127.0.0.1'  # the real-time interface: 30003 as on a UR
+    realtime_port: int = 30003
     tool: str = 'none'
     scene: str = 'empty'
     base_pose: tuple[float, ...] = (0.0, 0.0, 0.0, 0.0, 0.0, 0.0)
@@ -212,6 +214,8 @@ def sim_config_from_params(params: Mapping[str, Any]) -> SimConfig:
         primary_port=_integer('primary.port', get('primary.port', d.primary_port), 0, 65535),
         secondary_host=_host('secondary.host', get('secondary.host', d.secondary_host)),
         secondary_port=_integer('secondary.port', get('secondary.port', d.secondary_port), 0, 65535),
+        realtime_host=_host('realtime.host', get('realtime.host', d.realtime_host)),
+        realtime_port=_integer('realtime.port', get('realtime.port', d.realtime_port), 0, 65535),
         tool=_choice('tool', get('tool', d.tool), TOOLS),
         scene=_choice('scene', get('scene', d.scene), SCENES),
         base_pose=base_pose,
@@ -294,8 +298,9 @@ def _ros_name(parameter: str, value: Any) -> str:
 
 
 # Parameter names ur_sim reads: the configuration's fields, groups read as <group>.<name>, and rclpy's own.
-_GROUPS = ('constraints', 'speed_scaling', 'dashboard_server', 'rtde', 'primary', 'secondary')
-_GROUPED = {f'{g}_{n}' for g in ('dashboard_server', 'rtde', 'primary', 'secondary') for n in ('host', 'port')}
+_GROUPS = ('constraints', 'speed_scaling', 'dashboard_server', 'rtde', 'primary', 'secondary', 'realtime')
+_PORTS = ('dashboard_server', 'rtde', 'primary', 'secondary', 'realtime')
+_GROUPED = {f'{g}_{n}' for g in _PORTS for n in ('host', 'port')}
 _KNOWN = (set(SimConfig.__dataclass_fields__) - {'initial_scaling_factor'} - _GROUPED) | set(_GROUPS) | {
     'use_sim_time', 'start_type_description_service'}
 PARAMETER_NAMES = ', '.join(sorted(f'{n}.*' if n in _GROUPS else n for n in _KNOWN))

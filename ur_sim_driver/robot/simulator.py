@@ -24,6 +24,7 @@ from ur_sim_driver.errors import ConfigError
 from ur_sim_driver.physics.joint_control import JointControl
 from ur_sim_driver.physics.physics import ArmPhysics, ArmState
 from ur_sim_driver.physics.servo import JointServo, Setpoint
+from ur_sim_driver.physics.tool_contact import FLANGE_LINK, contact_threshold, tool_bodies
 from ur_sim_driver.physics.torque_control import PdGains
 from ur_sim_driver.robot.io_bank import IoBank
 from ur_sim_driver.robot.payload import NO_PAYLOAD, Payload, make_payload
@@ -85,6 +86,9 @@ class Simulator:
                                   base_body=f'{pre}base', payload_body=pre + PAYLOAD_BODY,
                                   tcp_sensors=(pre + TCP_POSITION_SENSOR, pre + TCP_ORIENTATION_SENSOR),
                                   ft_sensors=(pre + FT_FORCE_SENSOR, pre + FT_TORQUE_SENSOR))
+        # A tool contact (the driver's tool contact controller, a URScript program): these bodies, over this force [N].
+        self.tool_bodies = tool_bodies(self.physics.model, pre + FLANGE_LINK)
+        self.tool_contact_force = contact_threshold(cfg.protective_stop_force)
         q0 = np.array(cfg.initial_positions)
         bad = np.flatnonzero((q0 < self.params.q_min) | (q0 > self.params.q_max))
         if bad.size:

@@ -54,7 +54,7 @@ from ur_sim_driver.motion.jtc import TrajectoryController
 from ur_sim_driver.motion.tolerances import default_tolerances
 from ur_sim_driver.physics.physics import ArmState
 from ur_sim_driver.ports.dashboard_port import DashboardPort
-from ur_sim_driver.ports.primary_port import PrimaryPort
+from ur_sim_driver.ports.primary_port import REALTIME, SECONDARY, PrimaryPort
 from ur_sim_driver.ports.rtde_port import RtdePort
 from ur_sim_driver.ports.tcp_port import PortError
 from ur_sim_driver.robot.dashboard_server import DashboardServer
@@ -192,7 +192,9 @@ class UrSimNode(Node):
             self._open_port('primary interface', 'primary.port', lambda: PrimaryPort(
                 cfg.primary_host, cfg.primary_port, self.host, log=self.get_logger().info)),
             self._open_port('secondary interface', 'secondary.port', lambda: PrimaryPort(
-                cfg.secondary_host, cfg.secondary_port, self.host, secondary=True, log=self.get_logger().info)))
+                cfg.secondary_host, cfg.secondary_port, self.host, SECONDARY, log=self.get_logger().info)),
+            self._open_port('real-time interface', 'realtime.port', lambda: PrimaryPort(
+                cfg.realtime_host, cfg.realtime_port, self.host, REALTIME, log=self.get_logger().info)))
             if port is not None]
         self._thread = threading.Thread(target=self._run, name='ur_sim_loop', daemon=True)
         if start:

@@ -17,11 +17,13 @@ from ur_sim_driver.description.analytic_ik import UrAnalyticIK, nearest_branch
 from ur_sim_driver.errors import ConfigError, ScriptError
 from ur_sim_driver.motion.trajectory import TrajectorySample
 from ur_sim_driver.physics.physics import ArmState
+from ur_sim_driver.physics.tool_contact import strongest_touch
 from ur_sim_driver.robot.robot_state import RobotState
 from ur_sim_driver.robot.simulator import Simulator
 from ur_sim_driver.urscript.grammar import parse
 from ur_sim_driver.urscript.interpreter import Interpreter
 from ur_sim_driver.urscript.moves import JointLine, Move, Servo, Speed, ToolLine, ToolSpeed, tool_jacobian
+from ur_sim_driver.urscript.rtde_control import RtdeControlLoop, recognises
 from ur_sim_driver.urscript.values import Pose, Request, is_number, show
 
 END_DECELERATION = 2.0  # [rad/s^2] a program that ends while the arm moves at speed stops it with this
@@ -41,7 +43,8 @@ class ScriptProgram:
 
     def __init__(self, source: str, sim: Simulator, robot: RobotState, factor: Callable[[], float],
                  log: Callable[[str], None], name: str = 'unnamed') -> None:
-        self.interpreter = Interpreter(parse(source), self)
+        # ur_rtde's control script runs as a native loop of the same requests (rtde_control.py)
+        self.interpreter = RtdeControlLoop(source, self) if recognises(source) else Interpreter(parse(source), self)
         self.name = self.interpreter.name or name
         self.secondary = self.interpreter.secondary
         self.sim, self.robot, self._factor, self._log = sim, robot, factor, log
@@ -129,7 +132,8 @@ class ScriptProgram:
             self._move = self._build(*request.args)
             self._move_t = 0.0
             self._qd_nominal = self._move.sample(0.0)[1]  # a move built next in this same cycle starts from it
-            self._wait_move = self._move.returns_after > 0.0
+            # 'move' returns when the motion function would; 'start' (a native loop's) at once
+            self._wait_move = request.kind == 'move' and self._move.returns_after > 0.0
 
     def _end(self) -> None:
         self._program_done = True
@@ -227,6 +231,19 @@ class ScriptProgram:
         q = solutions[branch]
         q = near + (q - near + np.pi) % (2.0 * np.pi) - np.pi  # each joint's turn nearest qnear
         return [float(v) for v in q]
+
+    def move_finished(self) -> bool:
+        """No move runs, or the current one has reached its end."""
+        return self._move is None or self._move_t >= self._move.duration
+
+    def tool_touch(self) -> bool:
+        """The tool or the flange touches something over the tool contact force, this control period."""
+        return strongest_touch(self.sim.physics.contacts(), self.sim.tool_bodies, self.sim.tool_contact_force) \
+            is not None
+
+    def payload_cog(self) -> list[float]:
+        """The payload's centre of gravity the robot believes in (tool0 [m])."""
+        return [float(v) for v in self.sim.payload.cog]
 
     def set_digital_out(self, pin: int, on: bool) -> None:
         self.sim.io = self.sim.io.with_digital_out(pin, float(on))

@@ -67,8 +67,8 @@ def show(value) -> str:
 
 @dataclass(frozen=True)
 class Request:
-    """What the program waits for: `kind` ('move', 'sleep', 'sync') and its arguments (a move's: its name and the
-    URScript arguments, resolved)."""
+    """What the program waits for: `kind` ('move', 'sleep', 'sync', or 'start': a move that returns at once) and its
+    arguments (a move's: its name and the URScript arguments, resolved)."""
 
     kind: str
     args: tuple = ()
