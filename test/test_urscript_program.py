@@ -6,59 +6,12 @@ from __future__ import annotations
 import numpy as np
 import pytest
 from scipy.spatial.transform import Rotation
+from script_box import READY, Box
 
 from ur_sim_driver.errors import ScriptError
-from ur_sim_driver.motion.trajectory import TrajectorySample
-from ur_sim_driver.robot.robot_state import EXTERNAL_CONTROL_PROGRAM, PLAYING, STOPPED, RobotState
-from ur_sim_driver.robot.sim_config import SimConfig
-from ur_sim_driver.robot.simulator import Simulator
-from ur_sim_driver.urscript.runner import RUNTIME_ERROR, STARTED, TEXT, ScriptRunner
+from ur_sim_driver.robot.robot_state import EXTERNAL_CONTROL_PROGRAM, PLAYING, STOPPED
+from ur_sim_driver.urscript.runner import STARTED, TEXT
 from ur_sim_driver.urscript.runner import STOPPED as EV_STOPPED
-
-READY = [0.0, -1.2, 1.2, -1.57, -1.57, 0.0]  # [rad] an elbow-bent pose, away from singularities
-
-
-class Box:
-    """The simulated robot with its program slot, stepped cycle by cycle as the simulation loop steps it."""
-
-    def __init__(self, q0=READY, factor: float = 1.0) -> None:
-        self.sim = Simulator(SimConfig(ur_type='ur5e', initial_positions=tuple(q0)))
-        self.robot = RobotState()
-        self.factor = factor
-        self.log: list[str] = []
-        self.runner = ScriptRunner(self.sim, self.robot, lambda: self.factor, self.log.append)
-        self.events = []
-        self.runner.listen(self.events.append)
-        self.q: list[np.ndarray] = []
-        self.tcp: list[np.ndarray] = []
-
-    def run(self, source: str, limit: float = 30.0) -> float:
-        """Submit `source` and step until it ends; the simulated time it took [s]."""
-        self.runner.submit(source)
-        t0 = self.sim.time
-        while self.runner.current is not None:
-            assert self.sim.time - t0 < limit, 'the program did not end'
-            self.step()
-        return self.sim.time - t0
-
-    def step(self) -> None:
-        state = self.sim.state()
-        program = self.runner.commander()
-        if program is None:  # no program: the robot holds where it is
-            zero = np.zeros(6)
-            sample, stop = TrajectorySample(state.q, zero, zero, 0, True), state.q
-        else:
-            sample, stop = program.command(state, self.sim.control_dt)
-        self.sim.advance(state, sample, stop)
-        self.runner.after_cycle()
-        self.q.append(self.sim.state().q)
-        self.tcp.append(self.sim.tcp_pose()[0])
-
-    def kinds(self) -> list[str]:
-        return [e.kind for e in self.events]
-
-    def errors(self) -> list:
-        return [e for e in self.events if e.kind == RUNTIME_ERROR]
 
 
 def test_the_language_numbers_lists_functions_scopes_and_loops():
