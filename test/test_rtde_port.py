@@ -19,6 +19,7 @@ from sim_harness import point, running_sim, wait_for, wait_still
 
 from ur_glue_planner.motion.kinematics import Kinematics
 from ur_sim_driver.ports import rtde_protocol as rp
+from ur_sim_driver.ports.rtde_port import BACKLOG
 
 TIMEOUT = 10.0  # [s] of wall time for an answer
 
@@ -26,8 +27,12 @@ TIMEOUT = 10.0  # [s] of wall time for an answer
 class RtdeClient:
     """The client side of the protocol (big-endian: size, type, payload)."""
 
-    def __init__(self, address: tuple[str, int]) -> None:
-        self.sock = socket.create_connection(address, timeout=TIMEOUT)
+    def __init__(self, address: tuple[str, int], receive_buffer: int | None = None) -> None:
+        self.sock = socket.socket(socket.AF_INET, socket.SOCK_STREAM)
+        if receive_buffer is not None:  # before connecting: the window the server may fill
+            self.sock.setsockopt(socket.SOL_SOCKET, socket.SO_RCVBUF, receive_buffer)
+        self.sock.settimeout(TIMEOUT)
+        self.sock.connect(address)
 
     def close(self) -> None:
         self.sock.close()
@@ -78,8 +83,8 @@ def _cycles(h, n: int) -> None:
     wait_for(lambda: h.sim.rtde_port.cycle >= start + n, what=f'{n} control cycles')
 
 
-def _connect(h) -> RtdeClient:
-    client = RtdeClient(h.sim.rtde_port.address)
+def _connect(h, receive_buffer: int | None = None) -> RtdeClient:
+    client = RtdeClient(h.sim.rtde_port.address, receive_buffer)
     assert client.request(ord('V'), struct.pack('>H', 2)) == b'\x01'
     return client
 
@@ -283,3 +288,66 @@ def test_protocol_one_has_no_output_recipe_ids_and_streams_at_the_control_rate(h
         assert client.request(ord('P')) == b'\x01'
     finally:
         client.close()
+
+
+def _closed(client: RtdeClient) -> bool:
+    """The server has closed the connection (a read gets end of file)."""
+    client.sock.settimeout(TIMEOUT)
+    try:
+        return client.sock.recv(1) == b''
+    except ConnectionResetError:
+        return True
+
+
+def test_malformed_packages_close_that_connection_only(h):
+    other = _connect(h)
+    try:
+        recipe, types = other.outputs(500.0, ['timestamp'])
+        assert other.request(ord('S')) == b'\x01'
+        for bad in (struct.pack('>HB', 2, ord('V')),  # a size below the header's
+                    struct.pack('>HB', 3, ord('Z')),  # an unknown package type
+                    struct.pack('>HBB', 4, ord('V'), 2)):  # a version request one byte short
+            client = _connect(h)
+            client.sock.sendall(bad)
+            assert _closed(client), bad
+            client.close()
+        client = _connect(h)  # input data shorter than its recipe
+        assert client.inputs(['input_int_register_30'])[0] == 1
+        client.sock.sendall(struct.pack('>HBBH', 6, ord('U'), 1, 7))
+        assert _closed(client)
+        client.close()
+        _cycles(h, 3)
+        stamps = [struct.unpack('>d', other.data()[1][:8])[0] for _ in range(3)]
+        assert np.allclose(np.diff(stamps), h.sim.sim.control_dt)  # the other connection streams on
+    finally:
+        other.close()
+
+
+def test_an_oversized_recipe_is_refused_naming_the_limit(h):
+    client = _connect(h)
+    try:
+        recipe, types = client.outputs(500.0, ['actual_q'] * 1400)  # 1400 x 48 bytes a package
+        assert recipe == 0 and types == ['VECTOR6D'] * 1400
+        kind, text = client.receive()
+        assert kind == ord('M') and b'67204 bytes is over the package limit of 65535 bytes' in text
+        assert client.outputs(500.0, ['actual_q'] * 1300)[0] == 1  # 62404 bytes: within it
+    finally:
+        client.close()
+
+
+def test_a_client_that_never_reads_holds_up_neither_the_simulation_nor_others(h):
+    idle, reader = _connect(h, receive_buffer=4096), _connect(h)
+    try:
+        for client in (idle, reader):
+            client.outputs(500.0, ['timestamp', 'actual_q', 'actual_qd', 'target_q'])
+            assert client.request(ord('S')) == b'\x01'
+        t0 = h.sim.sim.time
+        for _ in range(6):  # 3000 cycles: more than the queue and the socket buffers hold
+            _cycles(h, 500)
+            while struct.unpack('>d', reader.data()[1][:8])[0] < h.sim.sim.time - 1e-9:
+                pass  # the reader keeps up
+        assert h.sim.sim.time - t0 >= 3000 * h.sim.sim.control_dt - 1e-9
+        assert sorted(len(s._out) for s in h.sim.rtde_port._sessions)[-1] == BACKLOG  # the idle one's, full
+    finally:
+        idle.close()
+        reader.close()

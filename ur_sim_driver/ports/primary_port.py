@@ -18,7 +18,8 @@ nothing runs. The commands the client library sends the same way are carried out
 The simulation loop calls :meth:`PrimaryPort.tick` after every control cycle and never waits for a client: each
 connection has a sending thread and a queue of ``backlog`` packages, from which the oldest are dropped for a client
 that does not read. Text that is not UTF-8, or a program longer than ``MAX_SCRIPT`` bytes, closes the connection.
-TCP keepalive and a user timeout end a connection whose peer is gone (a half-open one) and the threads with it.
+TCP keepalive and a user timeout (``tcp_port.configure``) end a connection whose peer is gone (a half-open one) and
+the threads with it.
 """
 from __future__ import annotations
 
@@ -42,9 +43,6 @@ PRIMARY, SECONDARY, REALTIME = 'primary', 'secondary', 'real-time'
 PERIOD = 0.1  # [s] of simulated time between robot state packages (10 Hz)
 BACKLOG = 1000  # packages queued per connection
 MAX_SCRIPT = 1024 * 1024  # [bytes] of one program (or one line) still incomplete
-SEND_BUFFER = 64 * 1024  # [bytes] the kernel's send buffer per connection
-KEEPALIVE = (30, 10, 3)  # idle [s], interval [s] and count of TCP keepalive probes
-USER_TIMEOUT = 30_000  # [ms] unacknowledged data after which the kernel ends a connection
 # Controller commands (not URScript) the client library sends as a script -> what they do to the robot.
 COMMANDS: dict[str, Callable[[RobotState], str | None]] = {
     'power on': RobotState.power_on, 'power off': RobotState.power_off,
@@ -250,7 +248,6 @@ class _Client:
     def run(self) -> None:
         sender = threading.Thread(target=self._send, name=self.port.what.replace(' ', '_') + '_sender', daemon=True)
         try:
-            _configure(self.sock)
             if self.port.kind != REALTIME:
                 with self.port.host.lock:
                     version = pm.version_message(self.port.version, self.port.host.sim.time)
@@ -307,15 +304,3 @@ class _Client:
             except OSError:
                 self.close()
                 return
-
-
-def _configure(sock: socket.socket) -> None:
-    """A bounded send buffer, keepalive probes and a user timeout (where the system has them)."""
-    sock.setsockopt(socket.SOL_SOCKET, socket.SO_SNDBUF, SEND_BUFFER)
-    sock.setsockopt(socket.SOL_SOCKET, socket.SO_KEEPALIVE, 1)
-    sock.setsockopt(socket.IPPROTO_TCP, socket.TCP_NODELAY, 1)  # a package per send: clients that recv one each
-    for name, value in zip(('TCP_KEEPIDLE', 'TCP_KEEPINTVL', 'TCP_KEEPCNT'), KEEPALIVE):
-        if hasattr(socket, name):
-            sock.setsockopt(socket.IPPROTO_TCP, getattr(socket, name), value)
-    if hasattr(socket, 'TCP_USER_TIMEOUT'):
-        sock.setsockopt(socket.IPPROTO_TCP, socket.TCP_USER_TIMEOUT, USER_TIMEOUT)

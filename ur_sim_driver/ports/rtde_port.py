@@ -31,6 +31,8 @@ from ur_sim_driver.ports.rtde_fields import READERS, WRITABLE, write
 from ur_sim_driver.ports.tcp_port import TcpPort
 
 BACKLOG = 1000  # packages queued per connection
+MAX_PACKAGE = 0xFFFF  # [bytes] a package's size field is 16 bits
+MAX_RECIPES = 255  # per direction and connection: a recipe id is one byte
 
 
 @dataclass(frozen=True)
@@ -197,18 +199,32 @@ class _Session:
             payload = payload[8:]
         names = tuple(n for n in payload.decode().split(',') if n)
         types = tuple(rp.OUTPUTS[n] if n in rp.OUTPUTS and n in READERS else rp.NOT_FOUND for n in names)
-        valid = bool(names) and rp.NOT_FOUND not in types and 0.0 < frequency <= self.port.rate
+        refusal = None
+        if names and rp.NOT_FOUND not in types:
+            size = rp.HEADER.size + 1 + rp.recipe_format(types).size
+            if not 0.0 < frequency <= self.port.rate:
+                refusal = f'output frequency {frequency} Hz is outside (0, {self.port.rate:g}] Hz'
+            elif size > MAX_PACKAGE:
+                refusal = (f'output recipe of {len(names)} variables: its data package of {size} bytes is over '
+                           f'the package limit of {MAX_PACKAGE} bytes')
+            elif len(self.outputs) >= MAX_RECIPES:
+                refusal = f'output recipe {len(self.outputs) + 1}: a connection has at most {MAX_RECIPES}'
+        valid = bool(names) and rp.NOT_FOUND not in types and refusal is None
         recipe_id = len(self.outputs) + 1 if valid else 0
         if valid:
             every = max(1, round(self.port.rate / frequency))
             self.outputs.append(OutputRecipe(recipe_id, names, types, every, rp.recipe_format(types)))
-        elif names and rp.NOT_FOUND not in types:
-            self._send(rp.text_message(f'output frequency {frequency} Hz is outside (0, {self.port.rate:g}] Hz',
-                                       level=2))
         answer = ','.join(types).encode()
         self._send(rp.package(rp.SETUP_OUTPUTS, (bytes([recipe_id]) if self.version >= 2 else b'') + answer))
+        if refusal is not None:  # after the answer: a client reads one package as the answer to its request
+            self._send(rp.text_message(refusal, level=2))
 
     def _setup_inputs(self, payload: bytes) -> None:
+        if len(self.inputs) >= MAX_RECIPES:
+            self._send(rp.package(rp.SETUP_INPUTS, b'\x00'))
+            self._send(rp.text_message(f'input recipe {len(self.inputs) + 1}: a connection has at most {MAX_RECIPES}',
+                                       level=2))
+            return
         names = tuple(n for n in payload.decode().split(',') if n)
         types = [rp.INPUTS[n] if n in rp.INPUTS and n in WRITABLE else rp.NOT_FOUND for n in names]
         if rp.NOT_FOUND not in types:

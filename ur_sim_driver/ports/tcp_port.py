@@ -1,4 +1,5 @@
-"""A TCP port of the robot: listening on an address, each connection served by a thread of its own."""
+"""A TCP port of the robot: listening on an address, each connection served by a thread of its own, its socket
+configured so that a peer that is gone (a half-open connection) ends it: TCP keepalive probes and a user timeout."""
 from __future__ import annotations
 
 import socket
@@ -7,6 +8,10 @@ import threading
 from collections.abc import Callable
 
 from ur_sim_driver.errors import UrSimError
+
+SEND_BUFFER = 64 * 1024  # [bytes] the kernel's send buffer per connection
+KEEPALIVE = (30, 10, 3)  # idle [s], interval [s] and count of TCP keepalive probes
+USER_TIMEOUT = 30_000  # [ms] unacknowledged data after which the kernel ends a connection
 
 
 class PortError(UrSimError):
@@ -24,6 +29,7 @@ class TcpPort:
     def __init__(self, what: str, host: str, port: int, serve: Callable[[socket.socket], None]) -> None:
         class Handler(socketserver.BaseRequestHandler):
             def handle(self) -> None:
+                configure(self.request)
                 serve(self.request)
 
         try:
@@ -49,3 +55,16 @@ class TcpPort:
         self._tcp.shutdown()
         self._tcp.server_close()
         self._thread.join(timeout=5.0)
+
+
+def configure(sock: socket.socket) -> None:
+    """A bounded send buffer, no Nagle delay (a package per send), keepalive probes and a user timeout (where the
+    system has them)."""
+    sock.setsockopt(socket.SOL_SOCKET, socket.SO_SNDBUF, SEND_BUFFER)
+    sock.setsockopt(socket.SOL_SOCKET, socket.SO_KEEPALIVE, 1)
+    sock.setsockopt(socket.IPPROTO_TCP, socket.TCP_NODELAY, 1)
+    for name, value in zip(('TCP_KEEPIDLE', 'TCP_KEEPINTVL', 'TCP_KEEPCNT'), KEEPALIVE):
+        if hasattr(socket, name):
+            sock.setsockopt(socket.IPPROTO_TCP, getattr(socket, name), value)
+    if hasattr(socket, 'TCP_USER_TIMEOUT'):
+        sock.setsockopt(socket.IPPROTO_TCP, socket.TCP_USER_TIMEOUT, USER_TIMEOUT)
