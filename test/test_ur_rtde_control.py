@@ -33,6 +33,13 @@ def run():
         yield out, final
 
 
+def test_the_dashboard_client_starts_the_robot_and_the_io_interface_sets_the_slider(run):
+    out, _ = run
+    assert out['power_off'] and out['running_mode']
+    assert out['loaded'] == 'Loaded program: /programs/wait_program.urp' and out['playing']
+    assert out['slider'] and out['slider_read'] == pytest.approx(0.5)
+
+
 def test_it_connects_and_each_move_reaches_its_target(run):
     out, _ = run
     assert out['connected'] and out['running']

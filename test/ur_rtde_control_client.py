@@ -1,19 +1,52 @@
 """A ur_rtde user's program, run by test_ur_rtde_control in a process of its own (ur_rtde's calls hold the GIL):
-RTDEReceiveInterface and RTDEControlInterface with their defaults against argv[1], then each motion command in turn,
-printing what ur_rtde returned and read as one JSON line."""
+against argv[1], the robot started from the DashboardClient (power off, on, brake release, load, play), the speed
+slider set through RTDEIOInterface, then RTDEControlInterface with its defaults and each motion command in turn;
+prints what ur_rtde returned and read as one JSON line."""
 import json
 import sys
 import time
 
+import dashboard_client
 import rtde_control
+import rtde_io
 import rtde_receive
 
 READY = [0.0, -1.2, 1.2, -1.57, -1.57, 0.0]
 
 host = sys.argv[1]
 receive = rtde_receive.RTDEReceiveInterface(host)  # every output variable, as by default
-control = rtde_control.RTDEControlInterface(host)
-out = {'connected': control.isConnected() and receive.isConnected(), 'running': control.isProgramRunning()}
+out = {}
+
+
+def wait_mode(mode: int) -> bool:
+    deadline = time.monotonic() + 30.0
+    while receive.getRobotMode() != mode and time.monotonic() < deadline:
+        time.sleep(0.01)
+    return receive.getRobotMode() == mode
+
+
+dashboard = dashboard_client.DashboardClient(host)  # the robot from its dashboard, as a user starts a cell
+dashboard.connect()
+dashboard.powerOff()
+out['power_off'] = wait_mode(3) and 'POWER_OFF' in dashboard.robotmode()
+dashboard.powerOn()
+dashboard.brakeRelease()
+out['running_mode'] = wait_mode(7) and 'RUNNING' in dashboard.robotmode()
+dashboard.loadURP('wait_program.urp')
+out['loaded'] = dashboard.getLoadedProgram()
+dashboard.play()
+out['playing'] = dashboard.running()
+io = rtde_io.RTDEIOInterface(host)
+out['slider'] = io.setSpeedSlider(0.5)
+t = receive.getTimestamp()
+while receive.getTimestamp() < t + 0.01:
+    time.sleep(0.001)
+out['slider_read'] = receive.getTargetSpeedFraction()
+io.setSpeedSlider(1.0)
+io.disconnect()
+
+control = rtde_control.RTDEControlInterface(host)  # stops the program that plays and runs its own
+out.update(connected=control.isConnected() and receive.isConnected(), running=control.isProgramRunning())
 
 
 def settled() -> list[float]:
@@ -72,4 +105,5 @@ out['running_after_stop'] = control.isProgramRunning()
 out['q_final'] = settled()
 control.disconnect()
 receive.disconnect()
+dashboard.disconnect()
 print(json.dumps(out))
