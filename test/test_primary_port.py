@@ -15,6 +15,7 @@ import threading
 import numpy as np
 import pytest
 from port_helpers import recv_exactly
+from scipy.spatial.transform import Rotation
 from sim_harness import running_sim, wait_for, wait_still
 
 from ur_sim_driver.ports import primary_messages as pm
@@ -27,7 +28,7 @@ pytestmark = pytest.mark.timeout(120)  # sockets answer at once and the simulati
 TIMEOUT = 10.0  # [s] of wall time for a package: it is queued before the test reads it
 STATE, MESSAGE = 16, 20
 TEXT, VERSION, KEY, RUNTIME_EXCEPTION = 0, 3, 7, 10
-ROBOT_MODE, MASTERBOARD, KINEMATICS, CONFIGURATION = 0, 3, 5, 6
+ROBOT_MODE, JOINT, TOOL, MASTERBOARD, CARTESIAN, KINEMATICS, CONFIGURATION = 0, 1, 2, 3, 4, 5, 6
 
 
 class Fields:
@@ -199,7 +200,8 @@ def test_the_robot_state_every_100_ms_with_modes_flags_and_kinematics(h, client)
         assert not m['protective_stopped'] and not m['emergency_stopped']
         assert m['speed_scaling'] == pytest.approx(h.sim.scaling.factor)
         assert m['target_speed_fraction'] == pytest.approx(h.sim.scaling.slider)
-    assert set(states[0]) == {ROBOT_MODE, MASTERBOARD, KINEMATICS, CONFIGURATION}
+    # in the order the robot sends them (a client such as python-urx needs the robot mode first)
+    assert list(states[0]) == [ROBOT_MODE, JOINT, CARTESIAN, KINEMATICS, MASTERBOARD, TOOL, CONFIGURATION]
     kin = states[0][KINEMATICS]
     kin.take('6I')
     theta, a, d, alpha = (kin.take('6d') for _ in range(4))
@@ -214,6 +216,28 @@ def test_the_robot_state_every_100_ms_with_modes_flags_and_kinematics(h, client)
     board = states[0][MASTERBOARD]
     board.take('IIBBddbbdd4f')
     assert board.take('B') == h.sim.robot.safety_mode
+
+
+def test_joint_cartesian_and_tool_data_are_the_robots(h, client):
+    client.message()  # the version
+    _cycles(h, 50)  # a 100 ms boundary: one state
+    state = client.state()
+    joints = [state[JOINT].take('3d4fB') for _ in range(6)]  # per joint, interleaved
+    assert state[JOINT].rest() == b''
+    assert np.allclose([j[0] for j in joints], h.q, atol=1e-4) and np.allclose([j[1] for j in joints], h.q, atol=1e-3)
+    assert all(np.isnan(j[3:6]).all() and j[6] == 0.0 and j[7] == 253 for j in joints)  # not simulated; RUNNING
+    pose = state[CARTESIAN].take('6d')
+    assert state[CARTESIAN].take('6d') == (0.0,) * 6 and state[CARTESIAN].rest() == b''  # no TCP offset
+    with h.sim.host.lock:
+        position, quat = h.sim.sim.tcp_pose()
+    assert np.allclose(pose[:3], position, atol=1e-4)
+    assert np.allclose(Rotation.from_rotvec(pose[3:]).as_matrix(), Rotation.from_quat(quat).as_matrix(), atol=1e-4)
+    ranges, inputs, supply, volts, current, temperature, mode = (state[TOOL].take(f) for f in ('BB', 'dd', 'f', 'B',
+                                                                                              'f', 'f', 'B'))
+    assert state[TOOL].rest() == b''
+    io = h.sim.sim.io
+    assert np.allclose(inputs, io.tool_analog_in) and volts == io.tool_voltage and mode == 253
+    assert np.isnan([supply, current, temperature]).all() and set(ranges) <= {0, 1}
 
 
 def test_a_line_of_bare_statements_runs_as_a_program(h, client):

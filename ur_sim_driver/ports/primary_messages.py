@@ -1,6 +1,8 @@
 """The packages of the primary and secondary interfaces (TCP 30001 / 30002) as bytes, in the layouts the Universal
 Robots Client Library parses (``primary_parser.h``, ``src/primary/robot_state/*.cpp`` and
-``src/primary/robot_message/*.cpp``). Big-endian throughout.
+``src/primary/robot_message/*.cpp``), and JointData, CartesianInfo and ToolData, which it skips but other clients
+read, in the layout of a URSim capture in that library's tests (the same on 3.10-3.15 and 5.x). Big-endian
+throughout. What is not simulated (currents, voltages, temperatures) is NaN, as on RTDE.
 
 A package is an int32 size (of the whole package, header included) and a uint8 type:
 
@@ -18,6 +20,8 @@ import struct
 
 from ur_sim_driver.controllers.base import Host
 from ur_sim_driver.description.params import URParams
+from ur_sim_driver.ports.rtde_fields import READERS, joint_mode
+from ur_sim_driver.robot.io_bank import VOLTAGE
 from ur_sim_driver.robot.robot_state import (
     PAUSED,
     PLAYING,
@@ -30,7 +34,8 @@ from ur_sim_driver.robot.robot_state import (
 from ur_sim_driver.robot.software import SoftwareVersion
 
 ROBOT_STATE, ROBOT_MESSAGE = 16, 20  # package types
-ROBOT_MODE_DATA, MASTERBOARD_DATA, KINEMATICS_INFO, CONFIGURATION_DATA = 0, 3, 5, 6  # robot state sub-packages
+ROBOT_MODE_DATA, JOINT_DATA, TOOL_DATA, MASTERBOARD_DATA, CARTESIAN_INFO, KINEMATICS_INFO, CONFIGURATION_DATA = \
+    0, 1, 2, 3, 4, 5, 6  # robot state sub-packages
 TEXT, VERSION, KEY, RUNTIME_EXCEPTION = 0, 3, 7, 10  # robot message types
 SOURCE_CONTROLLER, SOURCE_RUNTIME = -2, -3  # message sources, as the client library's test data has them
 PROGRAM_STARTED, PROGRAM_STOPPED = 'PROGRAM_XXX_STARTED', 'PROGRAM_XXX_STOPPED'  # key message titles
@@ -112,6 +117,36 @@ def robot_mode_data(host: Host, version: SoftwareVersion) -> bytes:
     return sub_package(ROBOT_MODE_DATA, body)
 
 
+NAN = float('nan')
+
+
+def joint_data(host: Host) -> bytes:
+    """Under the simulation lock: per joint (interleaved) actual and target position, actual velocity (as RTDE's),
+    current, voltage, motor and micro temperature (float; not simulated: NaN, the deprecated micro one 0) and the
+    joint mode."""
+    q, q_target, qd = (READERS[n](host) for n in ('actual_q', 'target_q', 'actual_qd'))
+    mode = joint_mode(host.robot.robot_mode)
+    body = b''.join(struct.pack('>3d4fB', q[j], q_target[j], qd[j], NAN, NAN, NAN, 0.0, mode) for j in range(6))
+    return sub_package(JOINT_DATA, body)
+
+
+def cartesian_info(host: Host) -> bytes:
+    """Under the simulation lock: the TCP pose (x, y, z [m], rotation vector [rad]; base frame, the flange: the
+    installation sets no TCP offset) and the TCP offset (zeros)."""
+    return sub_package(CARTESIAN_INFO, struct.pack('>12d', *READERS['actual_TCP_pose'](host),
+                                                   *READERS['tcp_offset'](host)))
+
+
+def tool_data(host: Host) -> bytes:
+    """Under the simulation lock: the tool's analog input ranges (1 voltage, 0 current) and values, its 48 V supply
+    (NaN), output voltage [V] (0, 12 or 24), current and temperature (NaN) and its mode (as the joints')."""
+    io = host.sim.io
+    ranges = (int(r == VOLTAGE) for r in io.tool_analog_in_range)
+    body = struct.pack('>BBddfBffB', *ranges, *io.tool_analog_in, NAN, int(io.tool_voltage), NAN, NAN,
+                       joint_mode(host.robot.robot_mode))
+    return sub_package(TOOL_DATA, body)
+
+
 def masterboard_data(host: Host) -> bytes:
     """Under the simulation lock: the control box's IO and safety mode. Temperature, voltage and currents are not
     simulated (0); no Euromap67 interface is installed."""
@@ -151,3 +186,10 @@ def configuration_data(params: URParams, version: SoftwareVersion) -> bytes:
 
 def robot_state(*subs: bytes) -> bytes:
     return package(ROBOT_STATE, b''.join(subs))
+
+
+def robot_state_now(host: Host, version: SoftwareVersion, kinematics: bytes, configuration: bytes) -> bytes:
+    """Under the simulation lock: the robot state package, its sub-packages in the order the robot sends them
+    (robot mode, joints, Cartesian, kinematics, masterboard, tool, configuration)."""
+    return robot_state(robot_mode_data(host, version), joint_data(host), cartesian_info(host), kinematics,
+                       masterboard_data(host), tool_data(host), configuration)

@@ -2,9 +2,10 @@
 state for every client, its messages for primary clients, and URScript from any, as a UR controller serves them.
 
 Per primary or secondary connection: the version message first (``primary_messages.version_message``, the robot's
-software version), then a ROBOT_STATE package every 100 ms of simulated time (RobotModeData, MasterboardData,
-KinematicsInfo and ConfigurationData). A real-time connection gets a package every control cycle
-(``realtime_messages.py``: 500 Hz on e-Series, 125 Hz on CB3), from the first cycle after it connects.
+software version), then a ROBOT_STATE package every 100 ms of simulated time (RobotModeData, JointData,
+CartesianInfo, KinematicsInfo, MasterboardData, ToolData and ConfigurationData). A real-time connection gets a
+package every control cycle (``realtime_messages.py``: 500 Hz on e-Series, 125 Hz on CB3), from the first cycle
+after it connects.
 A primary client also gets the program slot's events as robot messages: KEY messages
 ``PROGRAM_XXX_STARTED`` / ``PROGRAM_XXX_STOPPED`` with the program's name, RUNTIME_EXCEPTION with the line and column,
 and TEXT for a program's ``textmsg``.
@@ -136,7 +137,8 @@ class PrimaryPort:
         self.what = f'{kind} interface'
         self.version = software_version(host)
         params = host.sim.params
-        self._static = pm.kinematics_info(params) + pm.configuration_data(params, self.version)
+        self._kinematics = pm.kinematics_info(params)
+        self._configuration = pm.configuration_data(params, self.version)
         self._clients: list[_Client] = []  # replaced, never changed: the loop reads it unlocked
         self._clients_lock = threading.Lock()
         self._next = 0  # index of the next 100 ms period whose state is due
@@ -178,8 +180,7 @@ class PrimaryPort:
         clients = self._clients
         if clients:
             with self.host.lock:
-                state = pm.robot_state(pm.robot_mode_data(self.host, self.version), pm.masterboard_data(self.host),
-                                       self._static)
+                state = pm.robot_state_now(self.host, self.version, self._kinematics, self._configuration)
             for client in clients:
                 client.queue(state)
 
