@@ -35,7 +35,7 @@ def nodes():
         spinner = threading.Thread(target=executor.spin, daemon=True)
         spinner.start()
         try:
-            yield sim, client, executor
+            yield sim, client, spinner
         finally:
             executor.shutdown(timeout_sec=2.0)
             spinner.join(timeout=5.0)
@@ -56,9 +56,20 @@ def test_final_is_the_newest_bead_published(nodes):
     np.testing.assert_allclose(final.times, _bead(500).times)
     expected = _bead(500).points @ BASE_IN_WORLD[:3, :3].T  # base -> the planner's base_link
     np.testing.assert_allclose(final.points, expected, atol=1e-6)
-    # the one-shot subscription is gone again: only the listener's own remains
-    assert client.count_publishers(BEAD_TOPIC) == 1
-    assert sum(1 for s in client.subscriptions if s.topic_name == BEAD_TOPIC) == 1
+    assert sum(1 for s in client.subscriptions if s.topic_name == BEAD_TOPIC) == 1  # the listener's own only
+
+
+def test_final_again_and_again_leaves_the_clients_executor_spinning(nodes):
+    """The reader comes and goes while the client's executor spins in another thread (a subscription destroyed
+    under a spinning executor used to kill that thread, and every later call of the client went unanswered)."""
+    sim, client, spinner = nodes
+    latched = QoSProfile(depth=1, durability=DurabilityPolicy.TRANSIENT_LOCAL, reliability=ReliabilityPolicy.RELIABLE)
+    pub = sim.create_publisher(PointCloud2, BEAD_TOPIC, latched)
+    pub.publish(to_cloud(_bead(50), 'base', sim.get_clock().now().to_msg()))
+    listener = BeadListener(client)
+    for _ in range(30):
+        assert len(listener.final(timeout=20.0).times) == 50
+        assert spinner.is_alive()
 
 
 def test_final_without_a_bead_names_the_topic(nodes):

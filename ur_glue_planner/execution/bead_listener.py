@@ -8,10 +8,11 @@ message helper, not the simulator).
 """
 from __future__ import annotations
 
-import threading
+import time
 from dataclasses import dataclass
 
 import numpy as np
+from rclpy.executors import SingleThreadedExecutor
 from rclpy.node import Node
 from rclpy.qos import DurabilityPolicy, QoSProfile
 from sensor_msgs.msg import PointCloud2
@@ -90,22 +91,26 @@ class BeadListener:
 
         The newest message received so far may not be the newest published: the whole-bead cloud is large and
         can arrive after a later, small joint state. A new subscription is given the publisher's latched
-        (newest) message, so this is the last bead published before the call, whatever the delivery delays.
-        Raises ClientError when nothing arrives within ``timeout`` [s] of wall time (a hang guard).
+        (newest) message, so this is the last bead published before the call, whatever the delivery delays. The
+        subscription is a node of its own, spun here: destroying an entity while another thread's executor waits
+        on it is not safe in rclpy. Raises ClientError when nothing arrives within ``timeout`` [s] of wall time
+        (a hang guard).
         """
         got: list[PointCloud2] = []
-        arrived = threading.Event()
-
-        def first(msg: PointCloud2) -> None:
-            if not got:
-                got.append(msg)
-                arrived.set()
-
-        latched = QoSProfile(depth=1, durability=DurabilityPolicy.TRANSIENT_LOCAL)
-        sub = self._node.create_subscription(PointCloud2, BEAD_TOPIC, first, latched)
+        context = self._node.context
+        node = Node(f'{self._node.get_name()}_final_bead', context=context)
+        executor = SingleThreadedExecutor(context=context)
         try:
-            if not arrived.wait(timeout):
-                raise ClientError(f'no bead on {BEAD_TOPIC} within {timeout} s')
+            latched = QoSProfile(depth=1, durability=DurabilityPolicy.TRANSIENT_LOCAL)
+            node.create_subscription(PointCloud2, BEAD_TOPIC, got.append, latched)
+            executor.add_node(node)
+            deadline = time.monotonic() + timeout
+            while not got:
+                left = deadline - time.monotonic()
+                if left <= 0.0:
+                    raise ClientError(f'no bead on {BEAD_TOPIC} within {timeout} s')
+                executor.spin_once(timeout_sec=min(0.1, left))
         finally:
-            self._node.destroy_subscription(sub)
+            executor.shutdown()
+            node.destroy_node()
         return bead_from_cloud(got[0])
