@@ -18,10 +18,10 @@ from ur_sim_driver.robot.software import TORQUE_CONTROL, supports
 
 SCALED = 'scaled_joint_trajectory_controller'
 EFFORT = 'forward_effort_controller'
-# The launch file's inactive list that ur_sim has (force_mode_controller it has not).
+# The launch file's inactive list.
 JOINT_CONTROLLERS = (SCALED, 'joint_trajectory_controller', 'forward_velocity_controller',
-                     'forward_position_controller', EFFORT, 'passthrough_trajectory_controller',
-                     'freedrive_mode_controller', 'tool_contact_controller')
+                     'forward_position_controller', EFFORT, 'force_mode_controller',
+                     'passthrough_trajectory_controller', 'freedrive_mode_controller', 'tool_contact_controller')
 
 
 def joint_controllers(cfg: SimConfig) -> tuple[str, ...]:

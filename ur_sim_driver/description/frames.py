@@ -27,6 +27,30 @@ def frame_rotations(tree: Sequence[JointSpec], q: np.ndarray) -> dict[str, np.nd
     return rotations
 
 
+def frame_poses(tree: Sequence[JointSpec], q: np.ndarray) -> dict[str, np.ndarray]:
+    """Every frame of `tree` -> its pose (4, 4) in the tree's root frame, with the revolute joints at `q` [rad]."""
+    poses = {tree[0].parent: np.eye(4)}
+    for joint in tree:
+        t = poses[joint.parent] @ joint.origin.matrix()
+        if joint.index is not None:
+            t = t.copy()
+            t[:3, :3] = t[:3, :3] @ _rz(float(q[joint.index]))
+        poses[joint.child] = t
+    return poses
+
+
+def pose_between(poses: dict[str, np.ndarray], target: str, source: str) -> np.ndarray:
+    """(4, 4) pose of `source` in `target` (tf2's lookupTransform(target, source)).
+
+    Raises:
+        KeyError: a frame the tree does not have (the message names it and lists the frames).
+    """
+    for frame in (target, source):
+        if frame not in poses:
+            raise KeyError(f'frame {frame!r} does not exist; frames: {", ".join(sorted(poses))}')
+    return np.linalg.inv(poses[target]) @ poses[source]
+
+
 def rotation_between(rotations: dict[str, np.ndarray], target: str, source: str) -> np.ndarray:
     """(3, 3) rotation taking vectors in `source` to `target` (tf2's lookupTransform(target, source) rotation).
 

@@ -32,6 +32,7 @@ from ur_sim_driver.controllers.base import Component, Cycle, Host
 from ur_sim_driver.controllers.cdr_template import CdrTemplate
 from ur_sim_driver.controllers.controller_manager_node import ControllerManagerNode
 from ur_sim_driver.controllers.dispenser import SimulatedDispenser
+from ur_sim_driver.controllers.force_mode import ForceModeController
 from ur_sim_driver.controllers.force_torque_sensor_broadcaster import ForceTorqueSensorBroadcaster
 from ur_sim_driver.controllers.forward_command import ForwardCommandController
 from ur_sim_driver.controllers.freedrive_mode import FreedriveModeController
@@ -156,6 +157,7 @@ class UrSimNode(Node):
                                  scaling=self.scaling, scaled=True), self.gateway)
         self._gateway_controllers = {**self._trajectory, self._passthrough.name: self._passthrough}
         self._tool_contact = ToolContactController()
+        self._force_mode = ForceModeController()
         self.components: list[Component] = [
             JointStateBroadcaster(), SpeedScalingStateBroadcaster(), TcpPoseBroadcaster(),
             IoAndStatusController(), UrConfigurationController(), GravityUpdateController(), FrictionModelController(),
@@ -164,7 +166,7 @@ class UrSimNode(Node):
             ForceTorqueSensorBroadcaster(), RobotStatePublisher(), SimulatedDispenser(),
             *self._trajectory.values(), ForwardCommandController('position'), ForwardCommandController('velocity'),
             ForwardCommandController('effort'),
-            self._passthrough, FreedriveModeController(), self._tool_contact, AppliedWrenches()]
+            self._passthrough, self._force_mode, FreedriveModeController(), self._tool_contact, AppliedWrenches()]
         warning = startup.set_start_states(self.cfg, initial, self.components)
         if warning is not None:
             self.get_logger().warning(warning)
@@ -335,6 +337,13 @@ class UrSimNode(Node):
             sample, stop = commander.command(reported, self.sim.control_dt)
             tcp_position, tcp_orientation = self.sim.tcp_pose()
             wrench = self.sim.wrench()
+            hold = self._force_mode.take_hold(sample, state)
+            if hold is not None:  # force mode has ended: the robot holds where it left the reference
+                commander.take_over(hold)
+                sample, stop = commander.command(reported, self.sim.control_dt)
+            if self._force_mode.spec is not None:
+                sample, stop = self._force_mode.apply(sample, stop, tcp_position, self.sim.physics.tcp_velocity()[:3],
+                                                      tcp_orientation, wrench, self.sim.control_dt)
             if getattr(commander, 'free', False):  # freedrive: the robot compensates gravity, the arm is free
                 tau = self.sim.advance_free(state)
             else:
