@@ -9,7 +9,7 @@ with the requested force. The other axes follow the program (the active controll
 (scales the drive) are the robot's ``force_mode_set_damping`` and ``force_mode_set_gain_scaling``.
 
 UR does not publish its force controller. The virtual mass and the damping rate are ours: with the driver's defaults
-(damping 0.025, gain scaling 0.5) a 10 N request in free space reaches 3 cm in about 1.3 s, and pressing on the
+(damping 0.025, gain scaling 0.5) a 10 N request in free space reaches 3 cm in about 1.1 s, and pressing on the
 floor settles at the requested force (``test_force_mode.py``).
 
 Force frame, by ``kind`` (URScript's ``type``): 2 the task frame as given; 1 its y axis turned to point from the
