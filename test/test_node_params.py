@@ -38,8 +38,8 @@ def test_seed_ur10_preset_names_exist():
     ('tool', 'gripper', "'tool' = 'gripper' is invalid; valid choices: none, dispenser"),
     ('initial_positions', [0.0, 0.0, 4.0, 0.0, 0.0, 0.0], "'initial_positions' [2] = 4.0 rad is outside"),
     ('thread_priority', 120, "'thread_priority' = 120 must be an integer in [0, 99]"),
-    ('initial_joint_controller', 'force_mode_controller',
-     "'initial_joint_controller' = 'force_mode_controller' is not a joint controller of ur_sim; valid choices: "
+    ('initial_joint_controller', 'io_and_status_controller',
+     "'initial_joint_controller' = 'io_and_status_controller' is not a joint controller of ur_sim; valid choices: "
      'scaled_joint_trajectory_controller, joint_trajectory_controller, forward_velocity_controller'),
     ('initial_joint_controller', 'forward_effort_controller',
      "'initial_joint_controller' = 'forward_effort_controller' cannot be activated: Requested to use effort interface "
@@ -52,9 +52,15 @@ def test_seed_ur10_preset_names_exist():
                                      'simulated; valid: false'),
 ])
 def test_invalid_parameter_names_parameter_value_and_range(name, value, expected):
-    with ros_context() as ctx, pytest.raises(ConfigError) as err:
-        UrSimNode(context=ctx, parameter_overrides=[Parameter(name, value=value)], start=False)
-    assert expected in str(err.value)
+    with ros_context() as ctx:
+        try:
+            node = UrSimNode(context=ctx, parameter_overrides=[Parameter(name, value=value)], start=False)
+        except ConfigError as err:
+            assert expected in str(err)
+            return
+        node.shutdown()  # started after all: shut down, so that no ur_sim is left in this process's domain
+        node.destroy_node()
+        pytest.fail(f'{name} = {value!r} was accepted; expected ConfigError containing {expected!r}')
 
 
 def _fifo_permitted() -> bool:
