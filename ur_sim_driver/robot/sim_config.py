@@ -7,6 +7,7 @@ from dataclasses import dataclass
 from typing import Any
 
 from ur_sim_driver.description.params import UR_TYPES
+from ur_sim_driver.description.scene import scene_file
 from ur_sim_driver.errors import ConfigError
 from ur_sim_driver.robot.dispenser import DispenserParams, dispenser_params
 from ur_sim_driver.robot.payload import NO_PAYLOAD, Payload, make_payload
@@ -14,7 +15,6 @@ from ur_sim_driver.robot.safety import DEFAULT_CONTACT_FORCE, DEFAULT_FORCE_WIND
 from ur_sim_driver.robot.software import SoftwareVersion, default_version, parse_version
 
 TOOLS = ('none', 'dispenser')
-SCENES = ('empty', 'windshield')
 DEFAULT_JOINTS = ('shoulder_pan_joint', 'shoulder_lift_joint', 'elbow_joint',
                   'wrist_1_joint', 'wrist_2_joint', 'wrist_3_joint')
 
@@ -69,6 +69,7 @@ class SimConfig:
     realtime_port: int = 30003
     tool: str = 'none'
     scene: str = 'empty'
+    part_scan_seed: int = 0  # seeds the part scanners' noise (a scene with scanners): the same seed, the same scans
     base_pose: tuple[float, ...] = (0.0, 0.0, 0.0, 0.0, 0.0, 0.0)
     viewer: bool = False
     stopped_velocity_tolerance: float = 0.2
@@ -105,6 +106,17 @@ def _choice(name: str, value: Any, choices: tuple[str, ...]) -> str:
     if value not in choices:
         raise ConfigError(f"parameter '{name}' = {value!r} is invalid; valid choices: {', '.join(choices)}")
     return value
+
+
+def _scene(value: Any) -> str:
+    """'empty', a scene in config/scenes or the path of a scene file (checked: the name must resolve)."""
+    if value == 'empty':
+        return value
+    try:
+        scene_file(str(value))
+    except ConfigError as exc:
+        raise ConfigError(f"parameter 'scene': {exc}") from None
+    return str(value)
 
 
 def _number(name: str, value: Any, lo: float, hi: float, *, lo_open: bool = False) -> float:
@@ -217,7 +229,8 @@ def sim_config_from_params(params: Mapping[str, Any]) -> SimConfig:
         realtime_host=_host('realtime.host', get('realtime.host', d.realtime_host)),
         realtime_port=_integer('realtime.port', get('realtime.port', d.realtime_port), 0, 65535),
         tool=_choice('tool', get('tool', d.tool), TOOLS),
-        scene=_choice('scene', get('scene', d.scene), SCENES),
+        scene=_scene(get('scene', d.scene)),
+        part_scan_seed=_integer('part_scan_seed', get('part_scan_seed', d.part_scan_seed), 0, 2**31 - 1),
         base_pose=base_pose,
         viewer=bool(get('viewer', d.viewer)),
         stopped_velocity_tolerance=_number('constraints.stopped_velocity_tolerance',

@@ -17,7 +17,7 @@ from ur_sim_driver.description.mjcf import (
 )
 from ur_sim_driver.description.params import joint_names as model_joint_names
 from ur_sim_driver.description.params import load_ur_params
-from ur_sim_driver.description.scene import load_scene, pose_matrix
+from ur_sim_driver.description.scene import pose_matrix, read_scene
 from ur_sim_driver.description.tool import get_tool
 from ur_sim_driver.description.urdf import build_urdf
 from ur_sim_driver.errors import ConfigError
@@ -73,11 +73,13 @@ class Simulator:
         substeps = cfg.physics_substeps or max(1, math.ceil(self.control_dt / MAX_PHYSICS_STEP - 1e-9))
         # The mount only places the arm in the MuJoCo world (floor, scene); interfaces stay in the base frames.
         mount = pose_matrix(cfg.base_pose[:3], cfg.base_pose[3:]) if any(cfg.base_pose) else None
+        self.base_link_in_world = np.eye(4) if mount is None else mount  # (4, 4) where base_link is
         xml = build_mjcf(self.params, tf_prefix=cfg.tf_prefix, tool=tool, base_pose=mount,
                          timestep=self.control_dt / substeps)
-        if cfg.scene != 'empty':
-            for name, mesh, pose, collide in load_scene(cfg.scene):
-                xml = add_static_mesh(xml, name, mesh, pose, collide=collide)
+        # The scene's bodies and the part scanners over them (read once; the scanners' component casts their beams).
+        self.scene_bodies, self.scanners = read_scene(cfg.scene) if cfg.scene != 'empty' else ([], None)
+        for name, mesh, pose, collide in self.scene_bodies:
+            xml = add_static_mesh(xml, name, mesh, pose, collide=collide)
         self.mjcf = xml
         self.urdf = build_urdf(self.params, tf_prefix=cfg.tf_prefix, tool=tool)
         pre = cfg.tf_prefix

@@ -42,6 +42,7 @@ from ur_sim_driver.controllers.io_and_status import IoAndStatusController
 from ur_sim_driver.controllers.joint_command import HoldPosition, JointCommandController, JointCommander
 from ur_sim_driver.controllers.joint_state_broadcaster import JointStateBroadcaster
 from ur_sim_driver.controllers.joint_trajectory import JointTrajectoryControllerComponent
+from ur_sim_driver.controllers.part_scanner import PartScanners
 from ur_sim_driver.controllers.passthrough_trajectory import PassthroughTrajectoryController
 from ur_sim_driver.controllers.speed_scaling_state_broadcaster import SpeedScalingStateBroadcaster
 from ur_sim_driver.controllers.tcp_pose_broadcaster import TcpPoseBroadcaster
@@ -163,7 +164,7 @@ class UrSimNode(Node):
             IoAndStatusController(), UrConfigurationController(), GravityUpdateController(), FrictionModelController(),
             *((DashboardClient(),) if self.cfg.launch_dashboard_client else ()), RobotStateHelper(),
             TrajectoryUntilNode(), URScriptInterface(), SimulatedInputs(),
-            ForceTorqueSensorBroadcaster(), RobotStatePublisher(), SimulatedDispenser(),
+            ForceTorqueSensorBroadcaster(), RobotStatePublisher(), SimulatedDispenser(), PartScanners(),
             *self._trajectory.values(), ForwardCommandController('position'), ForwardCommandController('velocity'),
             ForwardCommandController('effort'),
             self._passthrough, self._force_mode, FreedriveModeController(), self._tool_contact, AppliedWrenches()]
