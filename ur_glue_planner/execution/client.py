@@ -232,6 +232,11 @@ class URClient:
             return 0.0
         return IDLE_PACE
 
+    @property
+    def prefix(self) -> str:
+        """The namespace prefix of the driver's interfaces: '' or e.g. '/ur10'."""
+        return self._prefix
+
     # ---- state -----------------------------------------------------------------------------------
     def _on_joint_state(self, msg: JointState) -> None:
         sample = JointStateSample(msg.header.stamp.sec + msg.header.stamp.nanosec * 1e-9, tuple(msg.name),

@@ -5,7 +5,8 @@ Works against ur_sim and the real UR driver alike (only their ROS interfaces are
 `controller_name` (override the job's), `timeout` [s] for the server and joint states, `render` (bool),
 `method` (constant_speed or seed1, overrides the job's), `compare` (bool: run the other method after it on the
 same job and put both beads side by side), `video` (bool: out_dir/run.mp4), `dispense` (bool: switch the glue
-gun on the job's output). The report: out_dir/index.html gathers the video, the bead targets and every figure.
+gun on the job's output). The report: out_dir/index.html gathers the video, the bead targets and every figure;
+the run itself is recorded in out_dir/bag/ (rosbag2, MCAP: execution/bag_recorder.py).
 Exit codes: 0 success, 2 invalid job, 3 no server or joint states, 4 planning failed, 5 execution failed,
 130 cancelled by Ctrl-C / SIGTERM (the active goal is cancelled first).
 """
@@ -97,14 +98,14 @@ def run_job(params: dict, stop: threading.Event, context=None) -> int:
             print(f'dispenser: output {d.pin} on at {d.t_on:.3f} s (lead {d.lead:.3f} s before the tip reaches '
                   f'the bead start at {d.t_arrive:.3f} s), off at {d.t_off:.3f} s (lag {d.lag:.3f} s before it '
                   f'reaches the end at {d.t_leave:.3f} s)', flush=True)
+            sub = out_dir if i == 0 else out_dir / method
             try:
-                outcome, run = execute(ur, plan, stop, gun=gun, bead=bead)
+                outcome, run = execute(ur, plan, stop, gun=gun, bead=bead, bag_dir=sub / 'bag')
             except Interrupted:
                 return 130
             except ClientError as exc:  # the robot stopped answering (a service or a goal response timed out)
                 print(f'ur_glue_planner: execution ({method}) failed: {exc}', file=sys.stderr)
                 return 3
-            sub = out_dir if i == 0 else out_dir / method
             summary = write_report(plan, run, outcome.error_code, outcome.error_string, sub,
                                    render=bool(params.get('render', True)) and i == 0)
             results.append((plan, run, outcome, summary))

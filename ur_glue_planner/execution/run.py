@@ -1,17 +1,22 @@
 """Running a plan on a robot through FollowJointTrajectory: one goal per segment, with the job's tolerances.
 
 Shared by the planner node and the studio: progress from the goal feedback, the bead's joint states recorded,
-a message for every result code, and a stop request that cancels the active goal.
+a message for every result code, and a stop request that cancels the active goal. The plan's tip path is published
+(planned_path.py) and the whole run recorded as a rosbag2 in MCAP (bag_recorder.py); a run that cannot be
+recorded goes on without its bag.
 """
 from __future__ import annotations
 
 import threading
 import time
 from collections.abc import Callable
+from pathlib import Path
 
+from ur_glue_planner.execution.bag_recorder import BagRecorder
 from ur_glue_planner.execution.bead_listener import BeadListener
 from ur_glue_planner.execution.client import GoalOutcome, URClient
 from ur_glue_planner.execution.dispenser_io import DispenserIO
+from ur_glue_planner.execution.planned_path import publish_planned_path, tf_prefix_of
 from ur_glue_planner.execution.switch_timer import SwitchEvent
 from ur_glue_planner.motion.plan import GluePlan
 from ur_glue_planner.report.glue_report import Executed
@@ -22,6 +27,7 @@ Progress = Callable[[str, float, float], None]
 FLOW_FALL = 7.0  # time constants from the flow's fall to below 0.1 % of its rate
 BEAD_DELIVERY = 1.0  # [s] of wall time allowed at least for the bead goal to reach the controller before it starts
 RECORD_RATE = 50.0  # [Hz] nominal; the report uses every message received (exact stamps)
+BAG_ROOT = Path('out') / 'bags'  # the bags of runs given no bag directory (the studio's), one per run
 MESSAGES = {
     0: 'bead completed',
     -1: 'the goal was invalid or preempted by another command',
@@ -70,9 +76,32 @@ def dispenser_events(plan: GluePlan) -> list[SwitchEvent]:
     return [SwitchEvent(d.t_on, d.pin, True, 'gun on'), SwitchEvent(d.t_off, d.pin, False, 'gun off')]
 
 
+def default_bag_dir(plan: GluePlan) -> Path:
+    """BAG_ROOT/<local time>_<job file name>_<method>: where a run given no bag directory is recorded."""
+    name = Path(plan.job.source_file).stem if plan.job.source_file else 'glue_job'
+    return BAG_ROOT / f'{time.strftime("%Y%m%d-%H%M%S")}_{name}_{plan.method}'
+
+
+def start_bag(ur: URClient, plan: GluePlan, bag_dir: str | Path | None,
+              log: Callable[[str], None] = _print) -> BagRecorder | None:
+    """Publish the plan's tip path and start recording the run into `bag_dir` (None: `default_bag_dir`); None
+    when the recording cannot start (it says why: the run goes on without a bag)."""
+    try:
+        publish_planned_path(ur.node, ur.prefix, plan, tf_prefix_of(ur.joint_names) + 'base_link', ur.now())
+    except Exception as exc:  # noqa: BLE001 - a viewer's topic, never a reason to stop the run
+        log(f'planned path: not published ({type(exc).__name__}: {exc})')
+    try:
+        return BagRecorder(ur.context, bag_dir if bag_dir is not None else default_bag_dir(plan), ur.prefix,
+                           log=log).start()
+    except Exception as exc:  # noqa: BLE001 - as above
+        log(f'bag: not recording ({type(exc).__name__}: {exc}); the run goes on')
+        return None
+
+
 def execute(ur: URClient, plan: GluePlan, stop: threading.Event, log: Callable[[str], None] = _print,
             on_progress: Progress | None = None, gun: DispenserIO | None = None,
-            bead: BeadListener | None = None) -> tuple[GoalOutcome, Executed | None]:
+            bead: BeadListener | None = None, bag_dir: str | Path | None = None,
+            record: bool = True) -> tuple[GoalOutcome, Executed | None]:
     """Run the plan's segments in order; returns the last outcome and the bead's recorded joint states.
 
     Args:
@@ -84,6 +113,8 @@ def execute(ur: URClient, plan: GluePlan, stop: threading.Event, log: Callable[[
         gun: Switches the glue gun during the bead (None: no dispensing). It is switched off at the end of
             the bead, and at once on a failure or a cancel.
         bead: The simulator's bead (None: not collected): cleared before the run, read after it.
+        bag_dir: The run's rosbag2 directory (None: `default_bag_dir`), recorded from before the first segment
+            until after the final bead is read; `record` False: no bag.
     """
     job = plan.job
     path_tol = ur.tolerances(job.tolerances.path_position)
@@ -97,6 +128,7 @@ def execute(ur: URClient, plan: GluePlan, stop: threading.Event, log: Callable[[
         # the gun starts off, and the call path to set_io is exercised before it matters: a first request can
         # take far longer than the next ones (DDS matching of the response path)
         gun.off(plan.dispense.pin, timeout=15.0)
+    bag = start_bag(ur, plan, bag_dir, log) if record else None
     try:
         for seg in plan.segments():
             early = max(0.0, -plan.dispense.t_on) if (seg.name == 'bead' and gun is not None) else 0.0
@@ -163,6 +195,11 @@ def execute(ur: URClient, plan: GluePlan, stop: threading.Event, log: Callable[[
             except Exception as exc:  # noqa: BLE001 - the original failure matters more; say this one too
                 log(f'dispenser: could not switch output {plan.dispense.pin} off: {exc}')
         rec_all = ur.stop_recording(whole, raw=True)
+        if bag is not None:
+            try:
+                bag.close()
+            except Exception as exc:  # noqa: BLE001 - the run's outcome matters more; say this one too
+                log(f'bag: could not be closed: {type(exc).__name__}: {exc}')
     if run is not None:
         run = Executed(run.t, run.q, run.qd, whole=rec_all, start_stamp=bead_start, switches=switches,
                        deposit=deposit, whole_t0=whole.start() if rec_all is not None else None)
