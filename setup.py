@@ -28,7 +28,7 @@ setup(
     entry_points={
         'console_scripts': [
             'ur_sim = ur_sim_driver.ros.node:main',
-            'ur_glue_planner = ur_glue_planner.execution.node:main',
+            'ur_glue_planner = ur_glue_planner.parts.command:main',
             'ur_glue_studio = ur_glue_planner.studio.node:main',
         ],
     },

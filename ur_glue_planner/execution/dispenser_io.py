@@ -15,9 +15,12 @@ from __future__ import annotations
 import threading
 from dataclasses import dataclass
 
+from builtin_interfaces.msg import Time
 from control_msgs.msg import JointTrajectoryControllerState
 from rclpy.node import Node
-from rclpy.qos import QoSProfile
+from rclpy.qos import DurabilityPolicy, QoSProfile, ReliabilityPolicy
+from rosgraph_msgs.msg import Clock
+from sensor_msgs.msg import JointState
 from std_msgs.msg import Float64
 from ur_msgs.msg import IOStates
 from ur_msgs.srv import SetIO
@@ -28,6 +31,11 @@ from ur_glue_planner.execution.switch_timer import ScaledClock, SwitchEvent, Swi
 SET_IO = '/io_and_status_controller/set_io'
 IO_STATES = '/io_and_status_controller/io_states'
 PLAIN_CONTROLLER = 'joint_trajectory_controller'  # advances by its own factor; the others by the robot's
+# [s] of robot time a paced ur_sim may run past the newest state this client handled, away from a switch: the
+# client keeps up (its queues of 20 do not overflow for long) while the simulation runs as fast as both can.
+FREE_AHEAD = 0.1
+# The client's last word counts, also for a ur_sim that subscribes after it was said: latched.
+PACE_QOS = QoSProfile(depth=1, durability=DurabilityPolicy.TRANSIENT_LOCAL, reliability=ReliabilityPolicy.RELIABLE)
 
 
 
@@ -66,7 +74,8 @@ class DispenserIO:
     500 Hz, 4 ms at 125 Hz, plus the service's delivery).
     """
 
-    def __init__(self, node: Node, controller_state: str, robot_scaling: str | None = None) -> None:
+    def __init__(self, node: Node, controller_state: str, robot_scaling: str | None = None,
+                 pace_topic: str | None = None, joint_states: str = '/joint_states') -> None:
         self.node = node
         self._robot_factor: float | None = None  # [0, 1] the latest robot speed scaling, when that is the clock's
         self.client = node.create_client(SetIO, SET_IO)
@@ -81,6 +90,14 @@ class DispenserIO:
         node.create_subscription(JointTrajectoryControllerState, controller_state, self._on_state,
                                  QoSProfile(depth=20))
         node.create_subscription(IOStates, IO_STATES, self._on_io, QoSProfile(depth=20))
+        # ur_sim in step with this client (its pace_topic): the newest robot time handled, held at the time of a
+        # switch call until its answer arrives, so the simulation waits for the call instead of running past it.
+        self._pace = node.create_publisher(Clock, pace_topic, PACE_QOS) if pace_topic else None
+        self._last_joint_state: float | None = None
+        self._pace_sent: float | None = None  # the last hold time published
+        if pace_topic:  # the robot's time while no goal is armed: joint states come every cycle, controller states
+            # only while the controller is active
+            node.create_subscription(JointState, joint_states, self._on_joint_state, QoSProfile(depth=20))
         self._uses_robot_scaling = robot_scaling is not None
         if robot_scaling is not None:
             node.create_subscription(Float64, robot_scaling, self._on_robot_scaling, QoSProfile(depth=20))
@@ -103,7 +120,8 @@ class DispenserIO:
         with self._lock:
             left = self._sequence.pending if self._sequence is not None else []
             self._clock = self._sequence = None
-            return left
+        self._publish_pace()
+        return left
 
     def _on_state(self, msg: JointTrajectoryControllerState) -> None:
         stamp = msg.header.stamp.sec + msg.header.stamp.nanosec * 1e-9
@@ -124,6 +142,39 @@ class DispenserIO:
             future = self.client.call_async(SetIO.Request(fun=SetIO.Request.FUN_SET_DIGITAL_OUT, pin=event.pin,
                                                           state=1.0 if event.state else 0.0))
             self._pending.append((event, stamp, t, future))
+            future.add_done_callback(lambda _: self._publish_pace())
+        self._publish_pace()
+
+    def _on_joint_state(self, msg: JointState) -> None:
+        self._last_joint_state = msg.header.stamp.sec + msg.header.stamp.nanosec * 1e-9
+        if self._clock is None:
+            self._publish_pace()
+
+    def _publish_pace(self) -> None:
+        """Tell a paced ur_sim how far it may run: ``FREE_AHEAD`` past the newest robot time this client handled
+        (controller state while a goal is armed, else joint state), but not past the earliest robot time of the next
+        switch (its trajectory time after the goal's start: the scaled controller's clock runs at most at the robot's
+        pace), and not past the stamp of a switch call not answered yet."""
+        newest = self._last_joint_state if self._clock is None else self._last_stamp
+        if self._pace is None:
+            return
+        if newest is None:
+            return
+
+        hold = newest + FREE_AHEAD
+        clock, sequence = self._clock, self._sequence
+        if clock is not None and sequence is not None and sequence.pending:
+            due = clock.start + min(e.t for e in sequence.pending) - 4.0 * sequence.half_period
+            hold = min(hold, max(newest, due))
+        hold = min([hold] + [s for _, s, _, f in self._pending if not f.done()])
+        # A message per change of half of FREE_AHEAD at most, and every held-back one: each message wakes ur_sim's
+        # executor, and one per cycle cost it a third of its time.
+        last = self._pace_sent
+        if last is not None and last <= hold < last + 0.5 * FREE_AHEAD and hold >= newest + FREE_AHEAD - 1e-9:
+            return
+        self._pace_sent = hold
+        sec = int(hold // 1)
+        self._pace.publish(Clock(clock=Time(sec=sec, nanosec=int(round((hold - sec) * 1e9)) % 1_000_000_000)))
 
     @property
     def robot_factor(self) -> float | None:
@@ -162,7 +213,8 @@ class DispenserIO:
         return bool(call_idempotent(self.client, request, f'switching pin {pin} off', timeout, resend).success)
 
 
-def dispenser_for(node: Node, prefix: str, controller: str) -> DispenserIO:
-    """The gun switched on the clock of trajectory controller `controller` under namespace `prefix` ('' or '/ns')."""
+def dispenser_for(node: Node, prefix: str, controller: str, pace_topic: str | None = None) -> DispenserIO:
+    """The gun switched on the clock of trajectory controller `controller` under namespace `prefix` ('' or '/ns');
+    `pace_topic`: keep a ur_sim started with that pace_topic in step with it."""
     robot = None if controller == PLAIN_CONTROLLER else f'{prefix}/speed_scaling_state_broadcaster/speed_scaling'
-    return DispenserIO(node, f'{prefix}/{controller}/controller_state', robot)
+    return DispenserIO(node, f'{prefix}/{controller}/controller_state', robot, pace_topic, f'{prefix}/joint_states')

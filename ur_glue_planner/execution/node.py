@@ -5,10 +5,13 @@ Works against ur_sim and the real UR driver alike (only their ROS interfaces are
 `controller_name` (override the job's), `timeout` [s] for the server and joint states, `render` (bool),
 `method` (constant_speed or seed1, overrides the job's), `compare` (bool: run the other method after it on the
 same job and put both beads side by side), `video` (bool: out_dir/run.mp4), `dispense` (bool: switch the glue
-gun on the job's output). The report: out_dir/index.html gathers the video, the bead targets and every figure;
-the run itself is recorded in out_dir/bag/ (rosbag2, MCAP: execution/bag_recorder.py).
+gun on the job's output), `measure_part` (bool, default true: read the cell's part scanners on ur_sim/part_scan,
+fit the part and move the bead onto it; without scanners the job runs on the nominal glass). The report:
+out_dir/index.html gathers the video, the bead targets and every figure; the run itself is recorded in
+out_dir/bag/ (rosbag2, MCAP: execution/bag_recorder.py).
 Exit codes: 0 success, 2 invalid job, 3 no server or joint states, 4 planning failed, 5 execution failed,
-130 cancelled by Ctrl-C / SIGTERM (the active goal is cancelled first).
+6 the part was refused (outside what the cell corrects; nothing dispensed), 130 cancelled by Ctrl-C / SIGTERM (the
+active goal is cancelled first).
 """
 from __future__ import annotations
 
@@ -25,6 +28,8 @@ from ur_glue_planner.execution.bead_listener import BeadListener
 from ur_glue_planner.execution.client import URClient
 from ur_glue_planner.execution.dispenser_io import SET_IO, dispenser_for
 from ur_glue_planner.execution.entry import start_ros
+from ur_glue_planner.execution.part_measure import SCAN_TOPIC, measure_part, read_scan
+from ur_glue_planner.execution.part_measure import describe as describe_part
 from ur_glue_planner.execution.run import Interrupted, execute
 from ur_glue_planner.job import METHODS, _choice, default_job_path, load_job
 from ur_glue_planner.motion.plan import plan_job
@@ -32,6 +37,8 @@ from ur_glue_planner.report.bead_report import LABELS, analyse_bead, write_bead_
 from ur_glue_planner.report.glue_report import scene_meshes, write_report
 from ur_glue_planner.report.html_page import write_index
 from ur_glue_planner.report.video import render_video
+from ur_glue_planner.scene.registration import Registration
+from ur_glue_planner.scene.waypoints import windshield_model
 
 
 def _bead_line(label: str, bead: dict | None) -> str:
@@ -45,6 +52,18 @@ def _bead_line(label: str, bead: dict | None) -> str:
             f"max {w['max']:.2f}), within +-5 % on {100 * bead['width_within_band_fraction']:.1f} % of the "
             f"length, gaps {bead['gap_length_mm']:.1f} mm, blobs {len(bead['blobs'])}, lateral max "
             f"{lat['max']:.3f} mm" + (f', closure overlap {closure:+.1f} mm' if closure is not None else ''))
+
+
+def _measured_part(ur: URClient, namespace: str, job) -> tuple[Registration | None, str | None]:
+    """The part as the cell's scanners see it (None: no scanners), and why it is refused (None: accepted)."""
+    profiles = read_scan(ur.node, namespace)
+    if profiles is None:
+        print(f'no part scan on {SCAN_TOPIC}: the bead is planned on the nominal glass', flush=True)
+        return None, None
+    found, reason = measure_part(profiles, windshield_model(job.windshield))
+    if found is not None:
+        print(describe_part(found), flush=True)
+    return found, reason
 
 
 def run_job(params: dict, stop: threading.Event, context=None) -> int:
@@ -78,6 +97,12 @@ def run_job(params: dict, stop: threading.Event, context=None) -> int:
         bead = BeadListener(ur.node)
         if not bead.available(timeout=2.0 if gun is not None else 0.1):
             bead = None  # a real driver: no simulated bead
+        part = None
+        if params.get('measure_part', True):
+            part, reason = _measured_part(ur, namespace, job)
+            if reason is not None:
+                print(f'ur_glue_planner: part refused, nothing dispensed: {reason}', file=sys.stderr)
+                return 6
         results = []
         for i, method in enumerate(methods):
             plan_for = replace(job, method=method)
@@ -87,7 +112,7 @@ def run_job(params: dict, stop: threading.Event, context=None) -> int:
                 # so the baseline runs as the seed does: path tolerance unchecked (-1), goal tolerance kept.
                 plan_for = replace(plan_for, tolerances=replace(job.tolerances, path_position=(-1.0,) * 6))
             try:
-                plan = plan_job(plan_for, ur.joint_state().q)
+                plan = plan_job(plan_for, ur.joint_state().q, part=part)
             except PlanningError as exc:
                 print(f'ur_glue_planner: planning ({method}) failed: {exc}', file=sys.stderr)
                 return 4
@@ -108,6 +133,8 @@ def run_job(params: dict, stop: threading.Event, context=None) -> int:
                 return 3
             summary = write_report(plan, run, outcome.error_code, outcome.error_string, sub,
                                    render=bool(params.get('render', True)) and i == 0)
+            if part is not None:
+                summary['part'] = part.describe()
             results.append((plan, run, outcome, summary))
             print(_bead_line(f'bead ({method})', summary.get('bead')), flush=True)
             if not outcome.succeeded:
@@ -168,7 +195,7 @@ def finish_report(results: list, out_dir: Path, video: bool = True) -> dict:
 
 
 def main(argv: list[str] | None = None) -> int:
-    """Entry point of `ur_glue_planner` (and `ros2 run ur_sim_driver ur_glue_planner`)."""
+    """One job, as `ur_glue_planner --ros-args ...` runs it (ur_glue_planner/parts/command.py dispatches)."""
     params, stop = start_ros('ur_glue_planner', argv)
     try:
         return run_job(params, stop, context=rclpy.get_default_context())

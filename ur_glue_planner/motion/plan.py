@@ -31,7 +31,9 @@ from ur_glue_planner.path.glue_path import GluePath, build_glue_path
 from ur_glue_planner.path.run_up import RunUpPath
 from ur_glue_planner.path.surface_path import SurfacePath
 from ur_glue_planner.path.timing import PathTiming, time_path
+from ur_glue_planner.scene.registration import Registration
 from ur_glue_planner.scene.waypoints import job_waypoints, tool_axis, windshield_model
+from ur_glue_planner.scene.windshield import WindshieldModel
 from ur_sim_driver.description.params import URParams, load_ur_params
 from ur_sim_driver.description.tool import ToolDef, get_tool
 
@@ -96,6 +98,8 @@ class GluePlan:
             tip stands off above it along the nozzle axis), or for seed 1 the waypoint polyline it walks.
         robot, tool: The arm's parameters and its tool, resolved once from the job's names.
         method: 'constant_speed' (ours) or 'seed1'.
+        surface: The glass the bead was laid on: the job's nominal glass, or the measured part.
+        part: The measurement the path was moved by (None: planned on the nominal glass).
     """
 
     job: GlueJob
@@ -118,6 +122,8 @@ class GluePlan:
     tool: ToolDef | None
     run_up: float = 0.0
     method: str = "constant_speed"
+    surface: WindshieldModel | None = None
+    part: Registration | None = None
 
     def segments(self) -> tuple[JointSegment, ...]:
         """The motion in execution order, each starting at its own time 0."""
@@ -156,8 +162,9 @@ def _check_limits(seg: JointSegment, kin: Kinematics, a_max: float) -> None:
 
 
 def plan_job(job: GlueJob, q_current: np.ndarray, qd_current: np.ndarray | None = None,
-             qdd_current: np.ndarray | None = None) -> GluePlan:
-    """Plan ``job`` for a robot now at joint state (q, qd, qdd) (6,) [rad, rad/s, rad/s^2].
+             qdd_current: np.ndarray | None = None, part: Registration | None = None) -> GluePlan:
+    """Plan ``job`` for a robot now at joint state (q, qd, qdd) (6,) [rad, rad/s, rad/s^2]; with ``part`` (the
+    part as measured), the bead's waypoints move with it onto the measured glass and the path follows that glass.
 
     Raises:
         PlanningError: Any stage fails (the message names the stage, sample and joint).
@@ -166,7 +173,8 @@ def plan_job(job: GlueJob, q_current: np.ndarray, qd_current: np.ndarray | None 
     params, tool = load_ur_params(job.ur_type), get_tool(job.tool)  # the job's names, resolved once
     kin = ur_kinematics(params, tool)
     axis = tool_axis(tool)
-    points, rots = job_waypoints(job, axis)
+    points, rots = job_waypoints(job, axis, part)
+    surface = windshield_model(job.windshield) if part is None else part.model
     refusal = reach_refusal(points, rots, params, tool)
     if refusal is not None:
         raise PlanningError(refusal)
@@ -175,7 +183,7 @@ def plan_job(job: GlueJob, q_current: np.ndarray, qd_current: np.ndarray | None 
     seed1 = job.method == "seed1"
     bead_path = path
     if job.path.follow_surface and not seed1:
-        bead_path = SurfacePath(path, windshield_model(job.windshield), job.standoff,
+        bead_path = SurfacePath(path, surface, job.standoff,
                                 tuple(float(x) for x in axis))
     motion_path, run_up = bead_path, 0.0
     if path.closed and job.dispenser.flying_start and not seed1:
@@ -197,7 +205,7 @@ def plan_job(job: GlueJob, q_current: np.ndarray, qd_current: np.ndarray | None 
         bead = build_joint_plan(motion_path, nominal, kin, q_guess, a_max=params.a_max)
         ss = np.linspace(0.0, path.length, max(2, int(np.ceil(path.length / 0.001)) + 1))
         # the glass under the path (the tip may stand off along the tilted axis, the bead does not)
-        line = windshield_model(job.windshield).project(path.sample(ss)[0])[1] \
+        line = surface.project(path.sample(ss)[0])[1] \
             if job.path.follow_surface else path.sample(ss)[0]
     dispense = schedule_dispenser(job.dispenser, bead.times, bead.s, bead.tcp_speed, run_up,
                                   bead.s[-1] if seed1 else run_up + path.length, job.tcp_speed)
@@ -244,6 +252,6 @@ def plan_job(job: GlueJob, q_current: np.ndarray, qd_current: np.ndarray | None 
     return GluePlan(job=job, kinematics=kin, waypoints=points, orientations=rots, path=path, nominal_timing=nominal,
                     branch=branch, branches=branches, bead=bead, approach=approach, descent=descent,
                     retreat=retreat, summary=summary, dispense=dispense, line=line, motion_path=motion_path,
-                    robot=params, tool=tool, run_up=run_up, method=job.method)
+                    robot=params, tool=tool, run_up=run_up, method=job.method, surface=surface, part=part)
 
 

@@ -45,14 +45,22 @@ def standoffs(plan: GluePlan, run, times: np.ndarray, points: np.ndarray) -> np.
     return out
 
 
-def analyse_bead(plan: GluePlan, run) -> tuple[dict, StationProfile] | None:
-    """summary.json's ``bead`` figures and the station profile, or None when no bead was collected."""
+def analyse_bead(plan: GluePlan, run, intended: tuple[np.ndarray, np.ndarray] | None = None
+                 ) -> tuple[dict, StationProfile] | None:
+    """summary.json's ``bead`` figures and the station profile, or None when no bead was collected.
+
+    ``intended``: the line (P, 3) and corner points (K, 3) [m] the bead is judged against, when they are not the
+    plan's own (a part the plan did not know exactly: the line as it lies on the real glass).
+    """
     dep = getattr(run, 'deposit', None) if run is not None else None
     if dep is None or len(dep.times) == 0:
         return None
-    model = windshield_model(plan.job.windshield)
-    line = model.project(plan.line)[1]
-    corners = project_onto_polyline(model.project(plan.waypoints)[1], line)[0]
+    if intended is None:
+        model = plan.surface if plan.surface is not None else windshield_model(plan.job.windshield)
+        line, corner_points = model.project(plan.line)[1], model.project(plan.waypoints)[1]
+    else:
+        line, corner_points = intended
+    corners = project_onto_polyline(corner_points, line)[0]
     figures, prof = bead_quality(dep.points, dep.widths, dep.heights, dep.times, line, nominal_width(plan),
                                  plan.job.path.closed, corner_stations=corners,
                                  standoff=standoffs(plan, run, dep.times, dep.points))

@@ -159,3 +159,45 @@ def register(profiles: np.ndarray, nominal: WindshieldModel) -> Registration:
                         edge_rms=float(np.sqrt(np.mean(edge ** 2))), edge_max=float(np.abs(edge).max()),
                         face_points=len(face), edge_points=len(edges),
                         model=fitted_model(nominal, transform, shape))
+
+
+@dataclass(frozen=True)
+class CellLimits:
+    """What the cell corrects: beyond these a part is refused, never dispensed on.
+
+    Attributes:
+        offset: [m] largest placement error per axis the fixture and the robot's reach allow for.
+        rotation_deg: [deg] largest turn per axis.
+        face_rms: [m] largest rms of the face residual (a higher one: the part is not the glass the cell knows,
+            or a scanner sees something else).
+        edge_max: [m] largest edge residual.
+        edges: fewest glass edges the scanners must see.
+    """
+
+    offset: float = 0.01
+    rotation_deg: float = 3.0
+    face_rms: float = 2e-4
+    edge_max: float = 5e-4
+    edges: int = 6
+
+
+def refusal(found: Registration, limits: CellLimits = CellLimits()) -> str | None:
+    """Why the part cannot be dispensed on, or None when the cell corrects it."""
+    axes = 'xyz'
+    offset, turn = found.offset, found.rotation_deg
+    for k in range(3):
+        if abs(offset[k]) > limits.offset:
+            return (f'the part is {1e3 * offset[k]:+.1f} mm off along {axes[k]}, beyond the '
+                    f'{1e3 * limits.offset:.0f} mm the cell corrects')
+        if abs(turn[k]) > limits.rotation_deg:
+            return (f'the part is turned {turn[k]:+.2f} deg about {axes[k]}, beyond the {limits.rotation_deg:g} deg '
+                    'the cell corrects')
+    if found.edge_points < limits.edges:
+        return f'the scanners saw {found.edge_points} glass edges, fewer than the {limits.edges} the fit needs'
+    if found.face_rms > limits.face_rms:
+        return (f'the glass does not fit the known part: face residual {1e3 * found.face_rms:.3f} mm rms, limit '
+                f'{1e3 * limits.face_rms:.3f} mm')
+    if found.edge_max > limits.edge_max:
+        return (f'an edge is not where the fitted part has it: {1e3 * found.edge_max:.3f} mm off, limit '
+                f'{1e3 * limits.edge_max:.3f} mm')
+    return None

@@ -20,6 +20,8 @@ from scipy.spatial.transform import Rotation
 from ur_glue_planner.errors import JobError
 from ur_glue_planner.job import GlueJob, WindshieldSpec
 from ur_glue_planner.orientation import rotation_from_zyx_euler
+from ur_glue_planner.scene.part_variation import move_onto
+from ur_glue_planner.scene.registration import Registration
 from ur_glue_planner.scene.windshield import DEFAULT_WINDSHIELD, WindshieldModel
 from ur_sim_driver.description.params import rpy_to_matrix
 from ur_sim_driver.description.tool import ToolDef, get_tool
@@ -89,19 +91,25 @@ def auto_waypoints(model: WindshieldModel, inset: float, spacing: float, tilt: f
     return points, align_axis(reference, axis, -body)
 
 
-def job_waypoints(job: GlueJob, axis: np.ndarray | None = None) -> tuple[np.ndarray, np.ndarray]:
+def job_waypoints(job: GlueJob, axis: np.ndarray | None = None, part: Registration | None = None
+                  ) -> tuple[np.ndarray, np.ndarray]:
     """Bead waypoints (K, 3) [m] and tip rotations (K, 3, 3) of a job, world frame; ``axis``: the tool's
-    (:func:`tool_axis`; None: found from ``job.tool``)."""
+    (:func:`tool_axis`; None: found from ``job.tool``). With ``part`` (the part as measured) they move with the
+    glass: each point to the same place on the measured glass, each rotation turned with the part."""
     model = windshield_model(job.windshield)
     zyx = np.array(job.path.orientation_zyx)
     rots = np.array([rotation_from_zyx_euler(*e) for e in zyx])
     if job.path.source == "auto":
-        return auto_waypoints(model, job.path.inset, job.path.point_spacing, math.radians(job.path.tilt_deg),
-                              job.standoff, rots[0], tool_axis(job.tool) if axis is None else axis)
-    points = np.array(job.path.waypoints)
-    if len(rots) == 1:
-        rots = np.repeat(rots, len(points), axis=0)
-    if job.standoff > 0.0:
-        _, _, normal = model.project(points)
-        points = points + job.standoff * normal
-    return points, rots
+        points, rots = auto_waypoints(model, job.path.inset, job.path.point_spacing,
+                                      math.radians(job.path.tilt_deg), job.standoff, rots[0],
+                                      tool_axis(job.tool) if axis is None else axis)
+    else:
+        points = np.array(job.path.waypoints)
+        if len(rots) == 1:
+            rots = np.repeat(rots, len(points), axis=0)
+        if job.standoff > 0.0:
+            _, _, normal = model.project(points)
+            points = points + job.standoff * normal
+    if part is None:
+        return points, rots
+    return move_onto(points, model, part.model), part.transform[:3, :3] @ rots

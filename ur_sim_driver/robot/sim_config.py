@@ -54,6 +54,11 @@ class SimConfig:
     # The trajectory controllers' own factor at start (ros2_controllers' speed_scaling.initial_scaling_factor, >= 0).
     initial_scaling_factor: float = 1.0
     real_time_factor: float = 1.0
+    # In step with a client: the loop steps only while the simulated time is at most pace_lag [s] past the time the
+    # client last published on pace_topic (rosgraph_msgs/Clock), at real time's pace before its first message; ''
+    # runs free (ros/node.py, _wait_for_pace).
+    pace_topic: str = ''
+    pace_lag: float = 0.02
     thread_priority: int = 50  # SCHED_FIFO priority of the real-time loop, as ros2_control_node's; 0: normal
     # The robot's dashboard server on TCP (ports/dashboard_port.py): 29999 as on a UR; 0 lets the system choose.
     dashboard_server_host: str = '127.0.0.1'
@@ -105,6 +110,14 @@ class SimConfig:
 def _choice(name: str, value: Any, choices: tuple[str, ...]) -> str:
     if value not in choices:
         raise ConfigError(f"parameter '{name}' = {value!r} is invalid; valid choices: {', '.join(choices)}")
+    return value
+
+
+def _pace_topic(value: Any) -> str:
+    """'' (no pacing) or a topic name."""
+    if not isinstance(value, str) or any(c.isspace() for c in value):
+        raise ConfigError(f"parameter 'pace_topic' = {value!r} must be '' (run free) or a topic name, e.g. "
+                          "'/ur_sim/pace'")
     return value
 
 
@@ -216,6 +229,8 @@ def sim_config_from_params(params: Mapping[str, Any]) -> SimConfig:
                                        get('speed_scaling.initial_scaling_factor', d.initial_scaling_factor),
                                        0.0, math.inf),
         real_time_factor=_number('real_time_factor', get('real_time_factor', d.real_time_factor), 0.0, 100.0),
+        pace_topic=_pace_topic(get('pace_topic', d.pace_topic)),
+        pace_lag=_number('pace_lag', get('pace_lag', d.pace_lag), 0.0, 10.0, lo_open=True),
         thread_priority=_integer('thread_priority', get('thread_priority', d.thread_priority), 0, 99),
         dashboard_server_host=_host('dashboard_server.host', get('dashboard_server.host', d.dashboard_server_host)),
         dashboard_server_port=_integer('dashboard_server.port', get('dashboard_server.port', d.dashboard_server_port),

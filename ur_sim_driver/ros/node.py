@@ -24,6 +24,7 @@ from pathlib import Path
 import rclpy
 from rclpy.executors import ExternalShutdownException, MultiThreadedExecutor
 from rclpy.node import Node
+from rclpy.qos import DurabilityPolicy, QoSProfile, ReliabilityPolicy
 from rclpy.signals import SignalHandlerOptions
 from rosgraph_msgs.msg import Clock
 
@@ -77,6 +78,8 @@ from ur_sim_driver.spin_thread import SpinThread
 from ur_sim_driver.urscript.runner import ScriptRunner
 
 GIL_SWITCH_INTERVAL = 2e-4  # [s]
+# pace_topic: the client's last word counts, also if it was said before ur_sim subscribed (a client may start first)
+PACE_QOS = QoSProfile(depth=1, durability=DurabilityPolicy.TRANSIENT_LOCAL, reliability=ReliabilityPolicy.RELIABLE)
 VIEWER_FRAME_PERIOD = 1.0 / 30.0  # [s] of wall time
 _CATCH_UP_LIMIT = 0.1  # [s] of wall time the real-time loop may fall behind before it stops catching up
 UNSCALED_CONTROLLER = 'joint_trajectory_controller'
@@ -124,6 +127,11 @@ class UrSimNode(Node):
         initial = startup.initial_joint_controller(self.cfg)  # checked before the gateway process starts
         startup.check_start(self.cfg)
         self._pub_clock = self.create_publisher(Clock, '/clock', 10)
+        # In step with a client (pace_topic): the robot time [s] it last published, None before its first message.
+        self._paced: float | None = None
+        self._pace_changed = threading.Condition()
+        if self.cfg.pace_topic:
+            self.create_subscription(Clock, self.cfg.pace_topic, self._on_pace, PACE_QOS)
 
         params = self.sim.params
         trajectory_names = (ctrl,) if ctrl == UNSCALED_CONTROLLER else (ctrl, UNSCALED_CONTROLLER)
@@ -275,6 +283,8 @@ class UrSimNode(Node):
             self._real_time_priority()
         try:
             while not self._stop.is_set():
+                if self.cfg.pace_topic:
+                    self._wait_for_pace()
                 self.step_once()
                 if viewer is not None and time.perf_counter() >= next_frame:
                     with self._lock:
@@ -298,6 +308,25 @@ class UrSimNode(Node):
         finally:
             if viewer is not None:
                 viewer.close()
+
+    def _on_pace(self, msg: Clock) -> None:
+        with self._pace_changed:
+            t = msg.clock.sec + msg.clock.nanosec * 1e-9
+            self._paced = t  # the newest, even if earlier: a client may hold the simulation back (a switch ahead)
+            self._pace_changed.notify_all()
+
+    def _wait_for_pace(self) -> None:
+        """Hold the loop while the last cycle published is more than pace_lag past the time the client last
+        published: the client (a planner switching IO on the trajectory's clock) sees the cycles it needs, and what
+        it sends in reply arrives within pace_lag of robot time however loaded the machine is. Until the client's
+        first message the loop runs at real time's pace (its clients find it, and it burns no core meanwhile)."""
+        lag, dt = self.cfg.pace_lag, self.sim.control_dt
+        with self._pace_changed:
+            if self._paced is None:
+                self._pace_changed.wait(dt)  # a message ends the wait early
+                return
+            while not self._stop.is_set() and self.sim.time - dt > self._paced + lag + 1e-9:
+                self._pace_changed.wait(0.05)  # woken by the client's next message; the timeout sees a stop
 
     def _real_time_priority(self) -> None:
         """Run this (the loop's) thread under SCHED_FIFO at `thread_priority`, as ros2_control_node runs its
