@@ -2,13 +2,16 @@
 SHELL := /bin/bash
 ENV := source scripts/env.bash &&
 
-.PHONY: setup demo test lint bench clean
+.PHONY: setup demo parts test lint bench clean
 
 setup:
 	@bash scripts/setup.sh
 
 demo: setup
 	@$(ENV) bash scripts/demo.sh
+
+parts: setup
+	@$(ENV) bash scripts/parts.sh
 
 test: setup
 	@$(ENV) ruff check .

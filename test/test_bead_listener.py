@@ -78,3 +78,13 @@ def test_final_without_a_bead_names_the_topic(nodes):
     with pytest.raises(ClientError, match=f'no bead on {BEAD_TOPIC} within 0.5 s'):
         listener.final(timeout=0.5)
     assert sum(1 for s in client.subscriptions if s.topic_name == BEAD_TOPIC) == 1
+
+
+def test_a_namespaced_simulator_s_bead_is_read_under_its_namespace(nodes):
+    sim, client, _ = nodes
+    latched = QoSProfile(depth=1, durability=DurabilityPolicy.TRANSIENT_LOCAL, reliability=ReliabilityPolicy.RELIABLE)
+    pub = sim.create_publisher(PointCloud2, '/ur10' + BEAD_TOPIC, latched)  # as ur_sim prefixes it
+    listener = BeadListener(client, namespace='/ur10')
+    assert (listener.topic, listener.clear_service) == ('/ur10/ur_sim/glue_bead', '/ur10/ur_sim/clear_glue_bead')
+    pub.publish(to_cloud(_bead(7), 'base', sim.get_clock().now().to_msg()))
+    assert len(listener.final(timeout=20.0).times) == 7

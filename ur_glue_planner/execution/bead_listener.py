@@ -55,13 +55,17 @@ def bead_from_cloud(msg: PointCloud2) -> BeadPoints:
 class BeadListener:
     """Keeps the newest bead cloud and clears the simulated bead on request."""
 
-    def __init__(self, node: Node) -> None:
+    def __init__(self, node: Node, namespace: str = '') -> None:
+        """``namespace``: ur_sim's ('' or e.g. '/ur10'), which prefixes the bead topic and its clear service."""
         self._node = node
+        ns = namespace.strip('/')
+        self.topic = f'/{ns}{BEAD_TOPIC}' if ns else BEAD_TOPIC
+        self.clear_service = f'/{ns}{CLEAR_SERVICE}' if ns else CLEAR_SERVICE
         self._msg: PointCloud2 | None = None
         self._count = 0
         latched = QoSProfile(depth=1, durability=DurabilityPolicy.TRANSIENT_LOCAL)
-        node.create_subscription(PointCloud2, BEAD_TOPIC, self._on_bead, latched)
-        self.clear_client = node.create_client(Trigger, CLEAR_SERVICE)
+        node.create_subscription(PointCloud2, self.topic, self._on_bead, latched)
+        self.clear_client = node.create_client(Trigger, self.clear_service)
 
     def _on_bead(self, msg: PointCloud2) -> None:
         self._msg = msg
@@ -80,7 +84,7 @@ class BeadListener:
         (clearing twice does no harm; see service_call.py)."""
         answer = call_idempotent(self.clear_client, Trigger.Request(), 'clearing the bead', timeout)
         if not answer.success:
-            raise ClientError(f'{CLEAR_SERVICE}: {answer.message}')
+            raise ClientError(f'{self.clear_service}: {answer.message}')
 
     def bead(self) -> BeadPoints | None:
         """The newest bead received, or None."""
@@ -102,13 +106,13 @@ class BeadListener:
         executor = SingleThreadedExecutor(context=context)
         try:
             latched = QoSProfile(depth=1, durability=DurabilityPolicy.TRANSIENT_LOCAL)
-            node.create_subscription(PointCloud2, BEAD_TOPIC, got.append, latched)
+            node.create_subscription(PointCloud2, self.topic, got.append, latched)
             executor.add_node(node)
             deadline = time.monotonic() + timeout
             while not got:
                 left = deadline - time.monotonic()
                 if left <= 0.0:
-                    raise ClientError(f'no bead on {BEAD_TOPIC} within {timeout} s')
+                    raise ClientError(f'no bead on {self.topic} within {timeout} s')
                 executor.spin_once(timeout_sec=min(0.1, left))
         finally:
             executor.shutdown()

@@ -338,6 +338,6 @@ def main(argv: list[str]) -> int:
         worker, workers = (int(x) for x in args.worker.split('/'))
         config = PartsRun(args.parts, args.seed, Path(args.out), job, limits, domain, args.real_time_factor)
         return run_worker(config, worker, workers, stop)
-    config = PartsRun(args.parts, args.seed, Path(args.out), job, limits, min(domain, 102 - args.jobs),
+    config = PartsRun(args.parts, args.seed, Path(args.out), job, limits, min(domain, 233 - args.jobs),
                       args.real_time_factor)
     return run_parts(config, args, min(args.jobs, args.parts), stop)
