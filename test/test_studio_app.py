@@ -53,7 +53,7 @@ def test_reach_marks_an_unreachable_waypoint(studio):
     wait_until(lambda: studio.reach_results[0] is not None and not studio.reach_results[0].reachable,
                'the reach check', timeout=30)
     assert studio.reach_results[0].reason.startswith('collision with the glass: dispenser')
-    assert '**unreachable**: collision with the glass' in studio._wp_info.content
+    assert '**unreachable**: collision with the glass' in studio.panel.wp_info.content
     wait_until(lambda: tuple(studio._markers[0].color) == sv.RED, 'the red marker')  # markers: sphere, label, ...
     assert tuple(studio._markers[2].color) == sv.GREEN
 
@@ -89,7 +89,7 @@ def test_a_run_result_stays_shown_while_its_thread_closes_its_client():
         s._on_run_done(RunResult(True, 0, 'all segments succeeded'), None)
         with s._lock:
             s._update_run_gui()
-        assert live.running and s._run_info.content == '**Run succeeded**: all segments succeeded'
+        assert live.running and s.panel.run_info.content == '**Run succeeded**: all segments succeeded'
     finally:
         closing.set()
         s.close()

@@ -3,11 +3,14 @@
 Stages, each with a screenshot under out/studio_test/: a click on the glass adds a waypoint at the surface point
 under that pixel; the keys turn a waypoint's orientation by the step and C saves it; Save writes the taught job;
 Plan shows the seed's figures and plays; Run executes on ur_sim and reports success while the page draws the live
-robot's tip path; Stop cancels. The live viewer without a job is in test_studio_live_browser.py.
+robot's tip path, its buttons staying put; a second run uses the same client and waits before the bead as long as
+the first bead's delivery needed; Stop cancels; a new plan clears the executed path. The live viewer without a job
+is in test_studio_live_browser.py, the page's own behaviour without a robot in test_studio_page_browser.py.
 """
 from __future__ import annotations
 
 import os
+import re
 import time
 from pathlib import Path
 
@@ -28,8 +31,11 @@ from studio_browser import (
     wait_until,
 )
 
+from ur_glue_planner.execution.client import delivery_margin
+from ur_glue_planner.execution.run import BEAD_DELIVERY
 from ur_glue_planner.studio.app import INITIAL_CAMERA, Studio
 from ur_glue_planner.studio.ros_link import LiveRobot
+from ur_glue_planner.studio.run_client import NODE_NAME, bead_margin
 from ur_sim_driver.paths import config_dir
 
 JOB = config_dir() / 'glue_job.yaml'
@@ -184,23 +190,68 @@ def test_plan_shows_the_figures_and_plays(studio, page):
     screenshot(page, '4_plan')
 
 
+def _button_y(page, name: str) -> float:
+    return page.get_by_role('button', name=name, exact=True).bounding_box()['y']
+
+
 def test_run_on_ur_sim_succeeds_with_the_robot_live_in_the_page(studio, page, sim):
     _tab(page, 'Run')
     page.get_by_role('button', name='Run', exact=True).click()
     wait_until(lambda: studio.live.running, 'the run to start')
-    wait_until(lambda: not studio.live.running, 'the run to finish', timeout=180)
+    # The Run and Stop buttons stay where they are while the run's messages come (a Stop click once missed).
+    places = set()
+
+    def finished() -> bool:
+        places.add((_button_y(page, 'Run'), _button_y(page, 'Stop')))
+        return not studio.live.running
+    pump_until(page, finished, 'the run to finish', timeout=180)
     assert studio.run_result is not None and studio.run_result.succeeded, studio.run_result
     assert studio.run_result.error_code == 0
     wait_until(lambda: page.get_by_text('Run succeeded').count() > 0, 'the page to report success')
+    places.add((_button_y(page, 'Run'), _button_y(page, 'Stop')))
+    assert len(places) == 1, places
     # The executed tip path, drawn as it went: judged by its length, not by its number of points (one per robot
     # update that reached the studio, which follows the machine's load). The bead alone is 2.2 m (2.18 m even
     # sampled once a second); the moves to and from it add more.
-    trail = np.array(studio._trail)
+    trail = np.array(studio.live_view.trail)
     length = float(np.linalg.norm(np.diff(trail, axis=0), axis=1).sum()) if len(trail) > 1 else 0.0
     assert length > 2.0, f'tip path: {len(trail)} points, {length:.3f} m'
     # The glue gun was switched and the simulated bead, about 2.2 m at one point per mm, is shown on the glass.
     wait_until(lambda: studio.bead_points_drawn > 1500, 'the bead in the page')
+    # After the run, the IK robot of the selected waypoint is drawn again beside the live one.
+    assert studio.mode == 'teach' and studio._model_view.frames['dispenser_tip'].visible
     screenshot(page, '5_run')
+
+
+def _logged(lines: list[str], pattern: str) -> float:
+    """The number in the first line matching ``pattern`` (one group)."""
+    return float(next(m.group(1) for m in (re.search(pattern, line) for line in lines) if m))
+
+
+def test_a_second_run_uses_the_same_client_and_waits_as_the_last_bead_needed(studio, page, sim):
+    ur = studio.live.client
+    assert ur is not None and ur.runs == 1
+    # A short goal answered slowly, as a busy machine answers one now and then: the rule of a new client
+    # (4 x, scaled to the bead's points) made that a wait of 10 s before the bead.
+    ur.goal_answers.append((0.3, 95))
+    sent, said = len(ur.goal_answers), len(studio.messages)
+    page.get_by_role('button', name='Run', exact=True).click()
+    wait_until(lambda: studio.live.running, 'the run to start')
+    wait_until(lambda: not studio.live.running, 'the run to finish', timeout=180)
+    assert studio.run_result is not None and studio.run_result.succeeded, studio.run_result
+    assert studio.live.client is ur and ur.runs == 2
+    assert sim.client.get_node_names().count(NODE_NAME) == 1  # no node made per run
+    lines = studio.messages[said:]
+    points = int(_logged(lines, r'^bead: (\d+) points'))
+    t_on = _logged(lines, r'on at t = (-?[0-9.]+) s')
+    ahead = _logged(lines, r'its start stamped (-?[0-9.]+) s ahead')
+    bead = next(k for k in range(sent, len(ur.goal_answers)) if ur.goal_answers[k][1] == points)
+    before = ur.goal_answers[:bead]
+    assert delivery_margin(before, BEAD_DELIVERY, points) > 9.0  # what a new client would have waited
+    lead = 0.1 + max(0.0, -t_on)
+    expected = lead + bead_margin(before, BEAD_DELIVERY, points)
+    # Stamped from the earlier bead's delivery (the log rounds to 0.1 s; robot time runs at the wall's pace).
+    assert expected - 0.1 <= ahead <= 1.2 * expected + 0.1, (ahead, expected, before)
 
 
 def test_stop_cancels_the_running_goal(studio, page, sim):
@@ -212,6 +263,21 @@ def test_stop_cancels_the_running_goal(studio, page, sim):
     wait_until(lambda: studio.run_result is not None, 'the run to end', timeout=60)
     assert not studio.run_result.succeeded and studio.run_result.message.startswith('stopped')
     wait_until(lambda: sim.sim.jtc.active_token is None, 'the controller to hold')
+    assert studio.live.client.runs == 3
+
+
+def test_a_new_plan_clears_the_executed_path(studio, page):
+    wait_until(lambda: studio.live_view.pieces_drawn > 0, 'the executed path of the runs')
+    old = studio.plan
+    _tab(page, 'Plan')
+    page.get_by_role('button', name='Plan', exact=True).click()
+    wait_until(lambda: studio.plan is not None and studio.plan is not old, 'the new plan', timeout=120)
+    assert studio.live_view.pieces_drawn == 0 and studio.live_view.trail == []
+    wp = studio.teach.current()  # and the IK robot at the selected waypoint, not the plan's start
+    wait_until(lambda: np.allclose(studio._model_view.frames['dispenser_tip'].position, wp.position, atol=1e-6),
+               'the IK robot at the selected waypoint')
+    for text in ('live robot (/joint_states)', 'executed tip path', 'deposited bead (simulation)'):
+        assert page.get_by_text(text).first.is_visible(), text
 
 
 @pytest.fixture(scope='module')

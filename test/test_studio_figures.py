@@ -1,9 +1,11 @@
 """The seed's four figures of a plan, as images for the page."""
 import numpy as np
+import pytest
 
 from ur_glue_planner.job import load_job
 from ur_glue_planner.motion.plan import plan_job
-from ur_glue_planner.studio.figures import FIGURES, plan_figures, speed_summary
+from ur_glue_planner.studio.figures import FIGURES, bead_window, plan_figures, speed_summary
+from ur_glue_planner.studio.playback import Timeline
 from ur_sim_driver.paths import config_dir
 
 
@@ -18,3 +20,14 @@ def test_four_non_blank_figures_and_the_speed_text():
         assert (image < 200).mean() > 0.01, f'{name} is blank'  # lines and text drawn on white
     text = speed_summary(plan)
     assert f'{plan.summary.speed_mean:.4f}' in text and 'Within 1 %' in text
+
+
+def test_the_figures_and_the_slider_say_which_time_they_show():
+    job = load_job(config_dir() / 'glue_job.yaml')
+    plan = plan_job(job, np.array(job.home))
+    start, end = bead_window(plan)
+    timeline = Timeline.from_plan(plan)
+    bead_span = next((a, b) for name, a, b in timeline.spans if name == 'bead')
+    assert (start, end) == pytest.approx(bead_span) and 0.0 < start < end < timeline.duration
+    text = speed_summary(plan)
+    assert f'0 to {plan.summary.total_duration:.2f} s' in text and f'{start:.2f} to {end:.2f} s' in text

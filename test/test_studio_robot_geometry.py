@@ -2,7 +2,7 @@
 import numpy as np
 
 from ur_glue_planner.motion.ur_arm_kinematics import ur_kinematics
-from ur_glue_planner.studio.robot_geometry import RobotModel, shapes_for, ur_shapes, urdf_shapes
+from ur_glue_planner.studio.robot_geometry import RobotModel, shapes_for, tip_frame_of, ur_shapes, urdf_shapes
 from ur_sim_driver.description.params import joint_names, load_ur_params
 from ur_sim_driver.description.tool import get_tool
 from ur_sim_driver.description.urdf import build_urdf
@@ -53,3 +53,14 @@ def test_seed_2_robot_mounted_1_m_up_is_drawn_there():
     assert poses['base_link_inertia'][2, 3] == 1.0
     kin = ur_kinematics('ur10', None, frame='wrist_3_link', base_pose=base)
     assert np.allclose(poses['wrist_3_link'], kin.fk(np.zeros(6)), atol=1e-12)
+
+
+def test_the_traced_tip_is_the_tool_tip_of_the_robot_description():
+    dispenser = get_tool('dispenser')
+    assert tip_frame_of(build_urdf(load_ur_params('ur5'), tool=dispenser)) == 'dispenser_tip'
+    assert tip_frame_of(build_urdf(load_ur_params('ur10e'), tf_prefix='left_', tool=dispenser)) == 'left_dispenser_tip'
+    assert tip_frame_of(build_urdf(load_ur_params('ur5'))) == 'tool0'  # no tool: the flange
+    chain = """<robot name="arm"><link name="base"/><link name="l1"/><link name="l2"/>
+      <joint name="j1" type="fixed"><parent link="base"/><child link="l1"/></joint>
+      <joint name="j2" type="fixed"><parent link="l1"/><child link="l2"/></joint></robot>"""
+    assert tip_frame_of(chain) == 'l2'  # another robot: the end of its chain

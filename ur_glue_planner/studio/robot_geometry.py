@@ -19,7 +19,7 @@ import trimesh
 
 from ur_sim_driver.description.mjcf import build_mjcf
 from ur_sim_driver.description.params import UR_TYPES, Origin, URParams, load_ur_params
-from ur_sim_driver.description.tool import ToolDef, get_tool
+from ur_sim_driver.description.tool import TOOL_CHOICES, ToolDef, get_tool
 
 LINK_COLOR = (150, 160, 175)
 TOOL_COLOR = (230, 125, 25)
@@ -169,3 +169,23 @@ def shapes_for(urdf: str) -> list[LinkShape]:
         tool = next((t for t in ('dispenser',) if prefix + t in links), None)
         return ur_shapes(load_ur_params(name), get_tool(tool), prefix)
     return urdf_shapes(urdf)
+
+
+def tip_frame_of(urdf: str) -> str:
+    """The frame whose path the live view traces: the mounted tool's tip (e.g. ``dispenser_tip``) when the URDF
+    has one of our tools, else the flange ``tool0`` (with the URDF's prefix), else the deepest link of the tree."""
+    root = ET.fromstring(urdf)
+    links = [link.get('name') for link in root.iter('link')]
+    prefix = next((ln[:-len('shoulder_link')] for ln in links if ln.endswith('shoulder_link')), '')
+    tips = [get_tool(name).tip_name for name in TOOL_CHOICES if get_tool(name) is not None]
+    for candidate in [prefix + tip for tip in tips] + [prefix + 'tool0']:
+        if candidate in links:
+            return candidate
+    parent = {j.find('child').get('link'): j.find('parent').get('link') for j in root.iter('joint')}
+
+    def depth(link: str) -> int:
+        n = 0
+        while link in parent and n < len(links):
+            link, n = parent[link], n + 1
+        return n
+    return max(links, key=depth)

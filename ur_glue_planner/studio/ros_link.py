@@ -22,11 +22,10 @@ from std_msgs.msg import String
 
 from ur_glue_planner.errors import ClientError, PlanningError
 from ur_glue_planner.execution.bead_listener import BeadListener, BeadPoints
-from ur_glue_planner.execution.client import URClient
-from ur_glue_planner.execution.dispenser_io import dispenser_for
 from ur_glue_planner.execution.run import Interrupted, describe, execute
 from ur_glue_planner.job import GlueJob
 from ur_glue_planner.motion.plan import GluePlan, plan_job
+from ur_glue_planner.studio.run_client import StudioClient
 from ur_sim_driver.spin_thread import SpinThread
 
 
@@ -42,11 +41,13 @@ class LiveState:
 
 @dataclass(frozen=True)
 class RunResult:
-    """How a run ended: succeeded, the error code (None if it never reached the robot), the message shown."""
+    """How a run ended: succeeded, the error code (None if it never reached the robot), the message shown, and
+    whether it ended because the plan from the robot's state failed (``message`` is then the planner's)."""
 
     succeeded: bool
     error_code: int | None
     message: str
+    planning_failed: bool = False
 
 
 class LiveRobot:
@@ -80,6 +81,7 @@ class LiveRobot:
         self._spinner = SpinThread(self._executor, 'studio_ros').start()
         self._run_thread: threading.Thread | None = None
         self._stop = threading.Event()
+        self.client: StudioClient | None = None  # the runs' connection, made by the first run
 
     def _on_joint_state(self, msg: JointState) -> None:
         state = LiveState(msg.header.stamp.sec + msg.header.stamp.nanosec * 1e-9, tuple(msg.name),
@@ -116,7 +118,8 @@ class LiveRobot:
                   timeout: float = 10.0) -> None:
         """Plan ``job`` from the robot's current state and execute it in a background thread.
 
-        ``on_done`` receives the result and the plan executed (None if planning or connecting failed).
+        ``on_done`` receives the result and the plan executed (None if planning or connecting failed). Every run
+        uses the same client (:mod:`~ur_glue_planner.studio.run_client`), made by the first.
         """
         if self.running:
             raise RuntimeError('a run is already in progress')
@@ -125,21 +128,22 @@ class LiveRobot:
         def work() -> None:
             plan = None
             try:
-                ur = URClient(namespace=namespace, controller_name=controller_name, timeout=timeout,
-                              context=self.context, node_name='ur_glue_studio_client')
+                ur = self._client_for(namespace, controller_name, timeout)
             except ClientError as exc:
                 on_done(RunResult(False, None, f'cannot connect: {exc}'), None)
                 return
+            ur.runs += 1
             try:
-                plan = plan_job(job, ur.joint_state().q)
+                try:
+                    plan = plan_job(job, ur.joint_state().q)
+                except PlanningError as exc:
+                    on_done(RunResult(False, None, str(exc), planning_failed=True), None)
+                    return
                 log(f'planned from the current state: total {plan.summary.total_duration:.2f} s')
                 # The glue gun is switched as by the planner node, where the driver has set_io; the simulated
                 # bead is cleared first where ur_sim has one.
-                prefix = '/' + namespace.strip('/') if namespace.strip('/') else ''
-                gun = dispenser_for(ur.node, prefix, controller_name)
-                gun = gun if gun.available(timeout=2.0) else None
-                bead = BeadListener(ur.node) if gun is not None else None
-                bead = bead if bead is not None and bead.available(timeout=1.0) else None
+                gun = ur.gun if ur.gun.available(timeout=2.0) else None
+                bead = ur.bead if gun is not None and ur.bead.available(timeout=1.0) else None
                 outcome, _ = execute(ur, plan, self._stop, log=log, on_progress=on_progress, gun=gun, bead=bead)
                 text = describe(outcome)
                 on_done(RunResult(outcome.succeeded, outcome.error_code, text), plan)
@@ -147,11 +151,18 @@ class LiveRobot:
                 on_done(RunResult(False, None, f'stopped: the {exc} goal was cancelled, the robot holds'), plan)
             except (PlanningError, ClientError) as exc:
                 on_done(RunResult(False, None, str(exc)), plan)
-            finally:
-                ur.close()
 
         self._run_thread = threading.Thread(target=work, daemon=True, name='ur_glue_studio_run')
         self._run_thread.start()
+
+    def _client_for(self, namespace: str, controller_name: str, timeout: float) -> StudioClient:
+        """The client of every run on this controller: made by the first run (or anew for another controller)."""
+        if self.client is not None and self.client.key != (namespace, controller_name):
+            self.client.close()
+            self.client = None
+        if self.client is None:
+            self.client = StudioClient(namespace, controller_name, timeout, self.context)
+        return self.client
 
     def stop_run(self, timeout: float = 15.0) -> None:
         """Cancel the active goal (the robot stops and holds) and wait for the run to end."""
@@ -163,6 +174,9 @@ class LiveRobot:
         """Stop a run, stop spinning, release the node (and the private context)."""
         if self.running:
             self.stop_run()
+        if self.client is not None:
+            self.client.close()
+            self.client = None
         self._spinner.stop()
         self.node.destroy_node()
         if self._own_context:
