@@ -3,6 +3,7 @@ from __future__ import annotations
 
 import numpy as np
 import pytest
+import trimesh
 import yaml
 
 from ur_glue_planner.scene.part_scene import write_part_scene
@@ -14,7 +15,7 @@ from ur_glue_planner.scene.part_variation import (
     placement_matrix,
 )
 from ur_glue_planner.scene.windshield import DEFAULT_WINDSHIELD
-from ur_glue_planner.scene.windshield_pieces import sample_uv
+from ur_glue_planner.scene.windshield_pieces import MAX_DEVIATION, hull_deviation, sample_uv
 from ur_sim_driver.description.scene import read_scene
 
 UV = sample_uv(DEFAULT_WINDSHIELD, SAMPLE_STEP)  # the glass, every 10 mm, as the generator samples it
@@ -81,7 +82,7 @@ def test_the_part_scene_places_the_generated_glass(tmp_path) -> None:
     scene = write_part_scene(part, tmp_path / 'part')
     bodies, scanners = read_scene(str(scene))
     names = [b[0] for b in bodies]
-    assert names[0] == 'windshield' and len([n for n in names if n.startswith('windshield_piece_')]) == 24
+    assert names[0] == 'windshield' and len([n for n in names if n.startswith('windshield_piece_')]) >= 24
     for _, mesh, pose, _ in bodies:
         assert pose == pytest.approx(part.model.pose, abs=1e-9) and mesh.is_file()
     # the scanners are the cell's: the same as over the nominal glass
@@ -89,3 +90,12 @@ def test_the_part_scene_places_the_generated_glass(tmp_path) -> None:
     # the meshes are relative to the scene file: the folder can move
     spec = yaml.safe_load(scene.read_text())
     assert all(not b['mesh'].startswith('/') for b in spec['bodies'])
+
+
+def test_a_strongly_bent_part_gets_finer_collision_pieces(tmp_path) -> None:
+    # part 18 of series 1 bends 1.73 mm: the nominal 12 x 2 tiles' hulls would stand 0.8 mm above its glass
+    part = make_part(DEFAULT_WINDSHIELD, 1, 18)
+    bodies, _ = read_scene(str(write_part_scene(part, tmp_path / 'part')))
+    hulls = [trimesh.load(str(mesh)) for name, mesh, _, _ in bodies if name != 'windshield']  # the glass's frame
+    above, _ = hull_deviation(part.model, hulls)
+    assert len(hulls) > 24 and above <= MAX_DEVIATION

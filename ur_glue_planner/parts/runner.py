@@ -27,6 +27,7 @@ import subprocess
 import sys
 import threading
 import time
+import traceback
 from contextlib import contextmanager
 from dataclasses import dataclass
 from pathlib import Path
@@ -60,7 +61,8 @@ STARTUP_TIMEOUT = 60.0  # [s] of wall time for ur_sim to come up on a loaded mac
 # latency becomes robot time times the speed-up (15 mm of bead at full speed, 55 mm under load at 4x).
 REAL_TIME_FACTOR = 0.0
 PACE_TOPIC = '/ur_sim/pace'
-DOMAIN_BASE = 40  # the workers' ROS domains without a ROS_DOMAIN_ID: 40 (worker 0), 41 (worker 1), ...
+# Without a ROS_DOMAIN_ID: 190 (worker 0), 191, ...: clear of the tests' 1..101 and the demo's 120..179.
+DOMAIN_BASE = 190
 
 
 @dataclass(frozen=True)
@@ -207,6 +209,9 @@ def run_part(config: PartsRun, index: int, nominal_plan: GluePlan, stop: threadi
 
 
 def _line(record: dict) -> str:
+    if 'error' in record:
+        return f"part {record['index']:3d}: failed, not judged: {record['error']}"
+
     def one(mode: str) -> str:
         r = record[mode]
         if r['refused'] is not None:
@@ -231,6 +236,11 @@ def run_worker(config: PartsRun, worker: int, workers: int, stop: threading.Even
             run_part(config, index, nominal_plan, stop)
         except Interrupted:
             return 130
+        except Exception as exc:  # noqa: BLE001 - one part's failure is reported, and the next part runs
+            folder = config.out_dir / f'part_{index:03d}'
+            folder.mkdir(parents=True, exist_ok=True)
+            (folder / 'result.json').write_text(json.dumps({'index': index, 'error': f'{type(exc).__name__}: {exc}',
+                                                            'traceback': traceback.format_exc()}, indent=2))
     return 0
 
 
@@ -241,9 +251,10 @@ def _worker_command(config: PartsRun, args: argparse.Namespace, worker: int, wor
             str(config.real_time_factor), '--worker', f'{worker}/{workers}'] + (['--job', args.job] if args.job else [])
 
 
-def write_summary(config: PartsRun, records: list[dict], seconds: float) -> dict:
-    """summary.json and index.html from the records so far."""
+def write_summary(config: PartsRun, records: list[dict], seconds: float, failed: list[dict]) -> dict:
+    """summary.json and index.html from the judged parts (and the ones that failed, with why)."""
     summary = summarize(records)
+    summary['failed'] = failed
     summary['seed'], summary['limits'] = config.seed, vars(config.limits)
     summary['real_time_factor'], summary['wall_seconds'] = config.real_time_factor, round(seconds, 1)
     (config.out_dir / 'summary.json').write_text(json.dumps(summary, indent=2))
@@ -284,15 +295,16 @@ def run_parts(config: PartsRun, args: argparse.Namespace, workers: int, stop: th
                 os.killpg(p.pid, signal.SIGKILL)
     if stop.is_set():
         return 130
-    done = [records[i] for i in sorted(records)]
-    summary = write_summary(config, done, time.monotonic() - t0)
+    done = [records[i] for i in sorted(records) if 'error' not in records[i]]
+    failed = [{'index': i, 'error': records[i]['error']} for i in sorted(records) if 'error' in records[i]]
+    summary = write_summary(config, done, time.monotonic() - t0, failed)
     c = summary['corrected']
     print(f"{len(done)} of {config.count} parts in {summary['wall_seconds']:.0f} s. Corrected: {c['meeting_goal']} of "
           f"{c['accepted']} accepted parts meet the goal, {c['refused']} refused; worst lateral p95 "
           f"{c['lateral_p95_mm']} mm. Report: {(config.out_dir / 'index.html').resolve()}", flush=True)
     if len(done) < config.count:
-        print(f'ur_glue_planner: {config.count - len(done)} parts were not run (worker exit status '
-              f'{[p.returncode for p in procs]})', file=sys.stderr)
+        print(f'ur_glue_planner: {config.count - len(done)} parts were not judged ({len(failed)} failed, see '
+              f'summary.json "failed"; worker exit status {[p.returncode for p in procs]})', file=sys.stderr)
         return 1
     accepted = [r['corrected'] for r in done if r['corrected']['refused'] is None]
     return 0 if all(meets_goal(r) for r in accepted) else 1
