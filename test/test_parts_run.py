@@ -44,19 +44,23 @@ def test_one_part_corrected_and_not(tmp_path) -> None:
 
 def test_a_paced_simulation_waits_for_its_client() -> None:
     with running_sim(lockstep=False, ur_type='ur5', initial_positions=HOME, pace_topic='/pace', pace_lag=0.02) as h:
-        dt = h.sim.sim.control_dt
+        dt, lag = h.sim.sim.control_dt, 0.02
         latched = QoSProfile(depth=1, durability=DurabilityPolicy.TRANSIENT_LOCAL,
                              reliability=ReliabilityPolicy.RELIABLE)
         pace = h.client.create_publisher(Clock, '/pace', latched)
-        for hold in (0.5, 1.25):
+        # Until the client's first word the simulation runs at real time's pace; a hold in the past stops it.
+        pace.publish(Clock(clock=_time(0.0)))
+        wait_for(lambda: h.sim.paced_until == 0.0, what='the hold at ur_sim')
+        stopped = h.sim.sim.time
+        for hold in (stopped + 0.5, stopped + 1.25):
             pace.publish(Clock(clock=_time(hold)))
-            wait_for(lambda: h.sim.sim.time >= hold, what=f'the simulation at {hold} s')  # noqa: B023
+            wait_for(lambda: h.sim.sim.time >= hold, what=f'the simulation at {hold:.3f} s')  # noqa: B023
             # and no further than the client allows (the newest cycle published within pace_lag of it; the
             # simulated time is one cycle past that cycle's stamp), however long it is left alone
-            limit = hold + 0.02 + 2 * dt + 1e-9
+            limit = hold + lag + 2 * dt + 1e-9
             assert h.sim.sim.time <= limit
             # an answer that takes no cycle (set_io): the simulation still holds meanwhile
-            request = SetIO.Request(fun=SetIO.Request.FUN_SET_DIGITAL_OUT, pin=3, state=float(hold > 1.0))
+            request = SetIO.Request(fun=SetIO.Request.FUN_SET_DIGITAL_OUT, pin=3, state=float(hold > stopped + 1.0))
             assert call(h, SetIO, f'{IO}/set_io', request).success
             assert h.sim.sim.time <= limit
 

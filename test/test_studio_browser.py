@@ -2,10 +2,11 @@
 
 Stages, each with a screenshot under out/studio_test/: a click on the glass adds a waypoint at the surface point
 under that pixel; the keys turn a waypoint's orientation by the step and C saves it; Save writes the taught job;
-Plan shows the seed's figures and plays; Run executes on ur_sim and reports success while the page draws the live
-robot's tip path, its buttons staying put; a second run uses the same client and waits before the bead as long as
-the first bead's delivery needed; Stop cancels; a new plan clears the executed path. The live viewer without a job
-is in test_studio_live_browser.py, the page's own behaviour without a robot in test_studio_page_browser.py.
+Plan measures the part with the cell's scanners, shows it and the seed's figures and plays; Run executes on ur_sim
+and reports success while the page draws the live robot's tip path, its buttons staying put; a second run uses the
+same client and waits before the bead as long as the first bead's delivery needed; Stop cancels; a new plan clears
+the executed path. The live viewer without a job is in test_studio_live_browser.py, the page's own behaviour without
+a robot in test_studio_page_browser.py.
 """
 from __future__ import annotations
 
@@ -169,8 +170,16 @@ def test_save_writes_the_taught_job(studio, page):
 
 def test_plan_shows_the_figures_and_plays(studio, page):
     _tab(page, 'Plan')
+    wait_until(lambda: studio.live.scan() is not None, "the cell's part scan")
     page.get_by_role('button', name='Plan', exact=True).click()
     wait_until(lambda: studio.plan is not None, 'the plan', timeout=120)
+    # planned on the part as the cell's scanners measured it (the nominal one here), which the page shows: their
+    # points, the measured glass and the bead's line on the nominal glass, with what the fit found in the messages
+    found = studio.plan.part
+    assert found is not None and np.abs(found.offset).max() < 3e-4
+    drawn = ['/part/scan', '/part/measured_glass', '/part/nominal_line']
+    wait_until(lambda: [h.name for h in studio.part_view.handles] == drawn, 'the measured part drawn')
+    wait_until(lambda: page.get_by_text('part measured: offset').count() > 0, 'the measurement in the messages')
     figures = page.locator('img[src^="blob:"]')  # the figures; viser's own icons are inline SVG
     wait_until(lambda: figures.count() == 4 and all(img.is_visible() for img in figures.all()), 'the four figures')
     wait_until(lambda: page.get_by_text('Planned TCP speed').count() > 0, 'the speed figures')

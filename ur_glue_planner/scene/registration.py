@@ -36,7 +36,7 @@ EDGE_SIGMA = 1e-4  # [m] weight of an edge residual (half a beam spacing)
 SHAPE_PRIOR = 0.01  # [m] a shape coefficient's pull towards 0 (weak: the lines decide where they see)
 
 
-@dataclass(frozen=True)
+@dataclass(frozen=True, eq=False)
 class Registration:
     """The fitted part.
 
@@ -48,6 +48,7 @@ class Registration:
         edge_rms, edge_max: [m] residual distances of the edge points.
         face_points, edge_points: how many were used.
         model: the fitted part (nominal glass moved and bent).
+        face, edges: the measured points used (F, 3), (E, 3) [m], world: what the scanners saw.
     """
 
     transform: np.ndarray
@@ -60,6 +61,8 @@ class Registration:
     face_points: int
     edge_points: int
     model: WindshieldModel
+    face: np.ndarray = dataclasses.field(default_factory=lambda: np.zeros((0, 3)))
+    edges: np.ndarray = dataclasses.field(default_factory=lambda: np.zeros((0, 3)))
 
     @property
     def offset(self) -> np.ndarray:
@@ -158,7 +161,7 @@ def register(profiles: np.ndarray, nominal: WindshieldModel) -> Registration:
                         face_rms=float(np.sqrt(np.mean(height ** 2))), face_max=float(np.abs(height).max()),
                         edge_rms=float(np.sqrt(np.mean(edge ** 2))), edge_max=float(np.abs(edge).max()),
                         face_points=len(face), edge_points=len(edges),
-                        model=fitted_model(nominal, transform, shape))
+                        model=fitted_model(nominal, transform, shape), face=face, edges=edges)
 
 
 @dataclass(frozen=True)

@@ -30,6 +30,7 @@ from ur_glue_planner.studio.legend import MODEL_OPACITY, MODEL_TINT, SPEED_SCALE
 from ur_glue_planner.studio.live_view import LiveView
 from ur_glue_planner.studio.messages import MessageLog, log_html
 from ur_glue_planner.studio.panel import LIVE_TEXT, build_panel
+from ur_glue_planner.studio.part_view import PartView, measured_part
 from ur_glue_planner.studio.plan_failure import plan_failure
 from ur_glue_planner.studio.playback import Clock, Timeline, bead_segments
 from ur_glue_planner.studio.reach import GlassCollision, Reach, ReachResult
@@ -89,6 +90,7 @@ class Studio(TeachView):
         self._gizmo = None
         self._status_shown = None
         self.live_view = LiveView(self.server, live, self._lift) if live is not None else None
+        self.part_view = PartView(self.server)  # the part as measured by the cell's scanners, with a plan on it
         self.panel = build_panel(self.server.gui, job_path is not None, live is not None, self._save_default)
         self._wire(job_path is not None)
         self.server.on_client_connect(self._on_connect)
@@ -198,6 +200,7 @@ class Studio(TeachView):
         self.panel.plan_info.content = 'No plan yet: press **Plan**.'
         self.panel.time.max = 1.0
         self.panel.time.value = 0.0
+        self.part_view.clear()
         self._reset_trail()
 
     def _show_glass(self) -> None:
@@ -259,8 +262,12 @@ class Studio(TeachView):
             except JobError as exc:
                 self.say(f'cannot plan: {exc}')
                 return None
+        found, reason = measured_part(self.live.scan() if self.live is not None else None, job, self.say)
+        if reason is not None:
+            self.say(f'part refused: {reason}')
+            return None
         try:
-            plan = plan_job(job, self.start_state())
+            plan = plan_job(job, self.start_state(), part=found)
         except GluePlannerError as exc:
             self.say(f'planning failed: {self.explain_failure(str(exc))}')
             return None
@@ -279,6 +286,7 @@ class Studio(TeachView):
                 self.panel.images[name].image = image
                 self.panel.images[name].visible = True
             self.panel.plan_info.content = speed_summary(plan)
+            self.part_view.show(plan)
             self.show_ik()
         self.say(f'planned: bead {plan.summary.bead_length:.3f} m, {plan.summary.total_duration:.2f} s')
         return plan
@@ -365,6 +373,8 @@ class Studio(TeachView):
         message = self.explain_failure(result.message) if result.planning_failed else result.message
         with self._lock:
             self.run_result = result
+            if plan is not None:
+                self.part_view.show(plan)  # the part as measured for this run
             word = 'succeeded' if result.succeeded else 'failed'
             self.panel.run_info.content = f'**Run {word}**: {message}'
             if self.mode == 'run':  # the IK robot again, beside the live one

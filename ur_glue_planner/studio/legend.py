@@ -2,7 +2,9 @@
 
 Two robots can be on the page: the live one (its own colours, from /robot_description) and the job's model, tinted
 blue and translucent, which shows the IK solution of the selected waypoint or plays the plan. Three paths: the
-planned bead coloured by planned tip speed, the executed tip path (red) and the deposited bead (amber points).
+planned bead coloured by planned tip speed, the executed tip path (red) and the deposited bead (amber points); with
+the cell's scanners, the measured part: their points, the measured glass, and the bead's line on the nominal glass
+beside the planned (corrected) bead.
 """
 from __future__ import annotations
 
@@ -18,6 +20,9 @@ MODEL_TINT = (150, 90, 220)  # the IK / playback robot: violet, apart from the l
 MODEL_OPACITY = 0.5
 EXECUTED_COLOR = (230, 30, 30)  # the tip path the live robot traced
 DEPOSIT_COLOR = (240, 160, 20)  # the simulated bead as deposited
+SCAN_COLOR = (20, 170, 90)  # the part scanners' points
+MEASURED_COLOR = (250, 200, 120)  # the glass as measured (translucent over the nominal glass)
+NOMINAL_PATH_COLOR = (120, 120, 120)  # the bead's line on the nominal glass, before the measurement moved it
 SPEED_SCALE = 1.1  # the planned bead's colours span 0 .. SPEED_SCALE x the commanded tip speed
 
 
@@ -61,6 +66,11 @@ def legend_entries(with_job: bool, live: bool, tcp_speed: float | None = None) -
     if live:
         entries.append(LegendEntry('executed', 'executed tip path', css(EXECUTED_COLOR)))
         entries.append(LegendEntry('deposited', 'deposited bead (simulation)', css(DEPOSIT_COLOR)))
+    if live and with_job:  # a plan on a measured part (where the cell has scanners)
+        entries.append(LegendEntry('scan', 'part scanners\' points, measured glass', f'linear-gradient(to right, '
+                                   f'{css(SCAN_COLOR)} 50%, {css(MEASURED_COLOR)} 50%)'))
+        entries.append(LegendEntry('nominal', 'bead line on the nominal glass (before the measurement)',
+                                   css(NOMINAL_PATH_COLOR)))
     return entries
 
 

@@ -17,15 +17,18 @@ from rclpy.context import Context
 from rclpy.executors import SingleThreadedExecutor
 from rclpy.node import Node
 from rclpy.qos import DurabilityPolicy, QoSProfile
-from sensor_msgs.msg import JointState
+from sensor_msgs.msg import JointState, PointCloud2
 from std_msgs.msg import String
 
 from ur_glue_planner.errors import ClientError, PlanningError
 from ur_glue_planner.execution.bead_listener import BeadListener, BeadPoints
+from ur_glue_planner.execution.part_measure import SCAN_TOPIC
 from ur_glue_planner.execution.run import Interrupted, describe, execute
 from ur_glue_planner.job import GlueJob
 from ur_glue_planner.motion.plan import GluePlan, plan_job
+from ur_glue_planner.studio.part_view import measured_part
 from ur_glue_planner.studio.run_client import StudioClient
+from ur_sim_driver.description.part_scan import from_cloud
 from ur_sim_driver.spin_thread import SpinThread
 
 
@@ -75,7 +78,10 @@ class LiveRobot:
         latched = QoSProfile(depth=1, durability=DurabilityPolicy.TRANSIENT_LOCAL)
         self.node.create_subscription(String, f'{self.prefix}/robot_description', self._on_description, latched)
         # The simulated bead (ur_sim with the dispenser only; a real driver has no such topic).
-        self.bead_listener = BeadListener(self.node)
+        self.bead_listener = BeadListener(self.node, self.prefix)
+        # The cell's part scanners (ur_sim in a scene with scanners; a cell without them has no such topic).
+        self._scan: np.ndarray | None = None
+        self.node.create_subscription(PointCloud2, f'{self.prefix}/{SCAN_TOPIC}', self._on_scan, latched)
         self._executor = SingleThreadedExecutor(context=context)
         self._executor.add_node(self.node)
         self._spinner = SpinThread(self._executor, 'studio_ros').start()
@@ -88,6 +94,16 @@ class LiveRobot:
                           np.array(msg.position), time.monotonic())
         with self._lock:
             self._state = state
+
+    def _on_scan(self, msg: PointCloud2) -> None:
+        profiles = from_cloud(msg)
+        with self._lock:
+            self._scan = profiles
+
+    def scan(self) -> np.ndarray | None:
+        """The newest part scan (scanners, beams, 3) [m] in base_link, or None (no scanners)."""
+        with self._lock:
+            return self._scan
 
     def _on_description(self, msg: String) -> None:
         with self._lock:
@@ -134,8 +150,12 @@ class LiveRobot:
                 return
             ur.runs += 1
             try:
+                found, reason = measured_part(self.scan(), job, log)
+                if reason is not None:
+                    on_done(RunResult(False, None, f'part refused, nothing dispensed: {reason}'), None)
+                    return
                 try:
-                    plan = plan_job(job, ur.joint_state().q)
+                    plan = plan_job(job, ur.joint_state().q, part=found)
                 except PlanningError as exc:
                     on_done(RunResult(False, None, str(exc), planning_failed=True), None)
                     return

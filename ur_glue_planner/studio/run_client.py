@@ -45,7 +45,7 @@ class StudioClient(URClient):
         # Made once with the node: entities made per run would pile up on it (destroying them under the
         # spinning executor is not safe in rclpy).
         self.gun: DispenserIO = dispenser_for(self.node, self.prefix, controller_name)
-        self.bead = BeadListener(self.node)
+        self.bead = BeadListener(self.node, self.prefix)
 
     def start_time(self, lead: float = 0.1, delivery: float = 0.3, points: int = 1) -> float:
         """As URClient's, with :func:`bead_margin` for the delivery."""

@@ -309,6 +309,12 @@ class UrSimNode(Node):
             if viewer is not None:
                 viewer.close()
 
+    @property
+    def paced_until(self) -> float | None:
+        """pace_topic: the robot time [s] the client last published (None before its first message or unpaced)."""
+        with self._pace_changed:
+            return self._paced
+
     def _on_pace(self, msg: Clock) -> None:
         with self._pace_changed:
             t = msg.clock.sec + msg.clock.nanosec * 1e-9
