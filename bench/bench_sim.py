@@ -33,7 +33,7 @@ from tf2_msgs.msg import TFMessage
 from trajectory_msgs.msg import JointTrajectoryPoint
 from ur_msgs.msg import IOStates, ToolDataMsg
 
-from ur_glue_planner.execution.action_client import ActionClient
+from ur_sim_driver.action_client import ActionClient
 from ur_sim_driver.motion.jtc import TrajectoryController
 from ur_sim_driver.motion.tolerances import default_tolerances
 from ur_sim_driver.motion.trajectory_types import TrajectoryCommand

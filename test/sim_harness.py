@@ -29,7 +29,7 @@ from trajectory_msgs.msg import JointTrajectory, JointTrajectoryPoint
 from ur_msgs.msg import Analog
 from ur_msgs.srv import SetAnalogOutput, SetIO, SetPayload, SetSpeedSliderFraction
 
-from ur_glue_planner.execution.action_client import ActionClient
+from ur_sim_driver.action_client import ActionClient
 from ur_sim_driver.controllers.base import destroy_node
 from ur_sim_driver.controllers.joint_trajectory import SPEED_SCALING_QOS
 from ur_sim_driver.robot.io_bank import SPAN

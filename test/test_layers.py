@@ -16,7 +16,8 @@ import ur_sim_driver
 
 # lowest first
 ORDER = ('description', 'physics', 'robot', 'motion', 'urscript', 'gateway', 'controllers', 'ports', 'ros')
-BASE = ('errors', 'paths', 'spin_thread')  # the modules at the top: importable by all, importing nothing of ours
+# the modules at the top: importable by all, importing nothing of ours
+BASE = ('errors', 'paths', 'spin_thread', 'action_client')
 SHARED = ('description',)  # the layers ur_glue_planner may import, besides BASE
 ROOT = Path(ur_sim_driver.__file__).parent
 PLANNER = Path(ur_glue_planner.__file__).parent

@@ -2,11 +2,13 @@
 from builtin_interfaces.msg import Duration
 from control_msgs.action import FollowJointTrajectory
 from control_msgs.msg import JointTolerance
-from rclpy.action import ActionClient, ActionServer
+from rclpy.action import ActionServer
 from rclpy.node import Node
 from ros_helpers import executor_with, ros_context, spin_until, spin_until_future
 from sensor_msgs.msg import JointState
 from trajectory_msgs.msg import JointTrajectoryPoint
+
+from ur_sim_driver.action_client import ActionClient
 
 TIMEOUT = 20.0  # [s] generous: discovery on a loaded 2-core CI machine
 

@@ -8,7 +8,6 @@ import numpy as np
 import pytest
 from action_msgs.msg import GoalStatus
 from builtin_interfaces.msg import Duration
-from rclpy.action import ActionClient
 from rclpy.callback_groups import ReentrantCallbackGroup
 from sim_harness import running_sim, wait_answer, wait_for, wait_still
 from std_msgs.msg import String
@@ -16,6 +15,7 @@ from ur_msgs.action import SendScript
 from ur_msgs.msg import IOStates
 from ur_msgs.srv import SetIO
 
+from ur_sim_driver.action_client import ActionClient  # rclpy's loses a fast goal response
 from ur_sim_driver.robot.robot_state import POWER_OFF, RUNNING
 from ur_sim_driver.urscript.runner import STOPPED
 

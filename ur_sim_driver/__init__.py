@@ -1,7 +1,8 @@
 """ur_sim_driver: a MuJoCo simulation of a Universal Robots arm behind the UR ROS 2 driver interfaces.
 
 Layers, each a subpackage; a module imports only from its own layer, the layers below it, and the modules at the
-top (``errors``, ``paths``, ``spin_thread``), which import nothing of ours (``test/test_layers.py`` checks it):
+top (``errors``, ``paths``, ``spin_thread``, ``action_client``), which import nothing of ours (``test/test_layers.py``
+checks it):
 
     ros          the ur_sim node, the dashboard services, robot_state_publisher, IO and wrench components
     ports        the robot's own network ports: the dashboard server on TCP 29999, RTDE on 30004

@@ -34,8 +34,8 @@ from std_msgs.msg import String
 
 from ur_glue_planner.errors import ClientError
 from ur_glue_planner.execution import ros_conversions as conv
-from ur_glue_planner.execution.action_client import ActionClient
 from ur_glue_planner.motion.kinematics import IkResult, Kinematics
+from ur_sim_driver.action_client import ActionClient
 from ur_sim_driver.spin_thread import SpinThread
 
 DEFAULT_CONTROLLER = 'scaled_joint_trajectory_controller'

@@ -25,11 +25,12 @@ import threading
 
 from action_msgs.msg import GoalStatus
 from control_msgs.action import FollowJointTrajectory
-from rclpy.action import ActionClient, ActionServer, CancelResponse, GoalResponse
+from rclpy.action import ActionServer, CancelResponse, GoalResponse
 from rclpy.callback_groups import MutuallyExclusiveCallbackGroup, ReentrantCallbackGroup
 from rclpy.node import Node
 from ur_msgs.action import FollowJointTrajectoryUntil, ToolContact
 
+from ur_sim_driver.action_client import ActionClient  # rclpy's loses a fast goal response
 from ur_sim_driver.controllers import startup
 from ur_sim_driver.controllers.base import Component, Host
 
