@@ -19,8 +19,15 @@ _held_lock = None  # keeps the lock file open (and the domain reserved) until th
 
 
 def _reserve_domain_id() -> int:
-    """Take the lowest free domain id in 1..101 that no other test process holds."""
+    """Take a free domain id in 1..101 that no other test process holds, for the life of this process."""
     global _held_lock
+    domain, _held_lock = reserve_domain()
+    return domain
+
+
+def reserve_domain() -> tuple[int, object]:
+    """A free domain id in 1..101 and its lock file: held until the file is closed (e.g. for processes a test
+    starts, which then meet nothing of this process's)."""
     _DOMAIN_LOCK_DIR.mkdir(parents=True, exist_ok=True)
     # Start from the pid so that concurrent processes rarely contend for the same file.
     start = os.getpid() % 101
@@ -32,8 +39,7 @@ def _reserve_domain_id() -> int:
         except OSError:
             f.close()
             continue
-        _held_lock = f
-        return domain
+        return domain, f
     raise RuntimeError(f'no free ROS_DOMAIN_ID in 1..101 under {_DOMAIN_LOCK_DIR}')
 
 

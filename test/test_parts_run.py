@@ -6,6 +6,7 @@ import json
 import math
 
 import pytest
+from conftest import reserve_domain
 from rclpy.qos import DurabilityPolicy, QoSProfile, ReliabilityPolicy
 from rosgraph_msgs.msg import Clock
 from sim_harness import running_sim, wait_for
@@ -18,9 +19,14 @@ HOME = [0.0, -math.pi / 2, 0.0, -math.pi / 2, 0.0, 0.0]
 
 
 @pytest.mark.timeout(240)  # one part: ur_sim started twice over, two glue runs of 25 s of robot time each
-def test_one_part_corrected_and_not(tmp_path) -> None:
+def test_one_part_corrected_and_not(tmp_path, monkeypatch) -> None:
     out = tmp_path / 'parts'
-    code = main(['--parts', '1', '--seed', '3', '--jobs', '1', '--out', str(out)])
+    domain, lock = reserve_domain()  # the runner's processes on a domain of their own, not this process's
+    try:
+        monkeypatch.setenv('ROS_DOMAIN_ID', str(domain))
+        code = main(['--parts', '1', '--seed', '3', '--jobs', '1', '--out', str(out)])
+    finally:
+        lock.close()
     summary = json.loads((out / 'summary.json').read_text())
     assert summary['parts'] == 1 and {'corrected', 'uncorrected'} <= set(summary)
     c, u = summary['corrected'], summary['uncorrected']
