@@ -47,6 +47,14 @@ def _frames(page, n: int) -> None:
         page.evaluate('new Promise(done => requestAnimationFrame(done))')
 
 
+def _settled(studio) -> None:
+    """The studio has finished what the last key began: its refresh sets the Waypoint field (to the selected
+    waypoint) under the studio's lock after the edit it shows, and one still running when a typed number arrived
+    reset the field before the number's handler read it (a CI run waited 60 s for waypoint 3)."""
+    with studio._lock:
+        pass
+
+
 def _keys_target(page) -> str:
     return page.locator('#studio-keys').get_attribute('data-target')
 
@@ -76,6 +84,7 @@ def test_an_arrow_key_turns_the_tool_and_not_the_view(studio, page):
 
 
 def test_after_typing_a_waypoint_number_the_keys_turn_the_tool_again(studio, page):
+    _settled(studio)
     field = page.get_by_label('Waypoint', exact=True)
     field.fill('3')
     wait_until(lambda: studio.teach.selected == 2, 'waypoint 3 selected from the field')
@@ -91,6 +100,7 @@ def test_after_typing_a_waypoint_number_the_keys_turn_the_tool_again(studio, pag
     wait_until(lambda: studio.teach.waypoints[2].saved, 'C to save')
     assert studio.teach.selected == 2
     # C and N act from the number field too (it takes no letters): N there selects the next waypoint.
+    _settled(studio)
     field.fill('7')
     wait_until(lambda: studio.teach.selected == 6, 'waypoint 7 selected from the field')
     field.press('n')
