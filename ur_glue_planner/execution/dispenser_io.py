@@ -34,7 +34,6 @@ PLAIN_CONTROLLER = 'joint_trajectory_controller'  # advances by its own factor; 
 # [s] of robot time a paced ur_sim may run past the newest state this client handled, away from a switch: the
 # client keeps up (its queues of 20 do not overflow for long) while the simulation runs as fast as both can.
 FREE_AHEAD = 0.1
-START_MARGIN = 0.05  # [s] paced: ur_sim waits this far short of an armed goal's start until the goal is accepted
 # The client's last word counts, also for a ur_sim that subscribes after it was said: latched.
 PACE_QOS = QoSProfile(depth=1, durability=DurabilityPolicy.TRANSIENT_LOCAL, reliability=ReliabilityPolicy.RELIABLE)
 
@@ -96,7 +95,6 @@ class DispenserIO:
         self._pace = node.create_publisher(Clock, pace_topic, PACE_QOS) if pace_topic else None
         self._last_joint_state: float | None = None
         self._pace_sent: float | None = None  # the last hold time published
-        self._start_hold: float | None = None  # paced: robot time to hold before until the armed goal is delivered
         if pace_topic:  # the robot's time while no goal is armed: joint states come every cycle, controller states
             # only while the controller is active
             node.create_subscription(JointState, joint_states, self._on_joint_state, QoSProfile(depth=20))
@@ -114,27 +112,19 @@ class DispenserIO:
         return self._pace is not None
 
     def arm(self, events: list[SwitchEvent], start: float) -> None:
-        """Switch ``events`` on the clock of a goal that starts at robot time ``start`` [s]. Paced, ur_sim is held
-        short of ``start`` until :meth:`delivered` says the goal reached it."""
+        """Switch ``events`` on the clock of a goal that starts at robot time ``start`` [s]."""
         with self._lock:
-            self._start_hold = start - START_MARGIN if self._pace is not None else None
             self._clock = ScaledClock(start)
             self._sequence = SwitchSequence(events)
             self.changes, self.records, self._pending = [], [], []
             for e in events:
                 self._watched.setdefault(e.pin, False)
 
-    def delivered(self) -> None:
-        """The armed goal was accepted: a paced ur_sim may run on to its start."""
-        with self._lock:
-            self._start_hold = None
-        self._publish_pace()
-
     def disarm(self) -> list[SwitchEvent]:
         """Stop switching; return the events that did not happen."""
         with self._lock:
             left = self._sequence.pending if self._sequence is not None else []
-            self._clock = self._sequence = self._start_hold = None
+            self._clock = self._sequence = None
         self._publish_pace()
         return left
 
@@ -178,8 +168,6 @@ class DispenserIO:
 
         hold = newest + FREE_AHEAD
         clock, sequence = self._clock, self._sequence
-        if self._start_hold is not None:
-            hold = min(hold, max(newest, self._start_hold))
         if clock is not None and sequence is not None and sequence.pending:
             due = clock.start + min(e.t for e in sequence.pending) - 4.0 * sequence.half_period
             hold = min(hold, max(newest, due))

@@ -26,7 +26,6 @@ Progress = Callable[[str, float, float], None]
 
 FLOW_FALL = 7.0  # time constants from the flow's fall to below 0.1 % of its rate
 BEAD_DELIVERY = 1.0  # [s] of wall time allowed at least for the bead goal to reach the controller before it starts
-PACED_LEAD = 0.3  # [s] of robot time from now to the bead's start on a ur_sim in step with the gun's client
 RECORD_RATE = 50.0  # [Hz] nominal; the report uses every message received (exact stamps)
 BAG_ROOT = Path('out') / 'bags'  # the bags of runs given no bag directory (the studio's), one per run
 MESSAGES = {
@@ -139,10 +138,7 @@ def execute(ur: URClient, plan: GluePlan, stop: threading.Event, log: Callable[[
             if seg.name == 'bead':
                 # The bead's start is fixed in advance (the gun switches on its clock): a stamp ahead, with a
                 # margin for the goal's delivery [s of wall time] that grows with the answer times seen so far.
-                if gun is not None and gun.paced:  # the simulation waits for the goal (gun.delivered)
-                    t0 = start = ur.now() + 0.1 + early + PACED_LEAD
-                else:
-                    t0 = start = ur.start_time(lead=0.1 + early, delivery=BEAD_DELIVERY, points=len(seg.times))
+                t0 = start = ur.start_time(lead=0.1 + early, delivery=BEAD_DELIVERY, points=len(seg.times))
                 ahead = start - ur.now()  # [s] of robot time
             else:
                 # The moves around it start on arrival: a stamp that a slow delivery put in the past would make
@@ -159,8 +155,6 @@ def execute(ur: URClient, plan: GluePlan, stop: threading.Event, log: Callable[[
             log(f'{seg.name}: {len(seg.times)} points, {seg.duration:.2f} s')
             feedback = _progress(seg.name, t0, seg.duration, log, on_progress)
             goal = ur.send_goal(request, start_time=start, wait=False, feedback_callback=feedback)
-            if seg.name == 'bead' and gun is not None:
-                gun.delivered()
             if seg.name == 'bead':
                 log(f'  accepted {1e3 * ur.goal_answers[-1][0]:.0f} ms after sending, its start stamped '
                     f'{ahead:.1f} s ahead')
