@@ -7,6 +7,7 @@ import math
 
 import pytest
 from conftest import reserve_domain
+from mcap.reader import make_reader
 from rclpy.qos import DurabilityPolicy, QoSProfile, ReliabilityPolicy
 from rosgraph_msgs.msg import Clock
 from sim_harness import running_sim, wait_for
@@ -46,6 +47,13 @@ def test_one_part_corrected_and_not(tmp_path, monkeypatch) -> None:
     assert code == 0
     assert (out / 'index.html').is_file() and (out / 'lateral_p95_mm.png').is_file()
     assert (out / 'part_000' / 'run.log').read_text().count('bead:') == 2
+    # each run recorded as a bag (read with mcap, not rosbags which wrote it): the arm's states, the scan, the bead
+    for mode in ('corrected', 'uncorrected'):
+        with open(out / 'part_000' / f'bag_{mode}' / f'bag_{mode}.mcap', 'rb') as f:
+            summary = make_reader(f).get_summary()
+        counts = {summary.channels[i].topic: n for i, n in summary.statistics.channel_message_counts.items()}
+        assert counts['/joint_states'] > 1000 and counts['/ur_sim/part_scan'] > 10, counts
+        assert counts['/ur_sim/glue_bead'] >= 1 and counts['/tf_static'] >= 1, counts
 
 
 def test_a_paced_simulation_waits_for_its_client() -> None:

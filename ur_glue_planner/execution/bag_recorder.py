@@ -1,7 +1,8 @@
 """A glue run recorded as a rosbag2 in MCAP: what the robot did, what was planned and the bead it laid.
 
 :class:`BagRecorder` subscribes (raw: the CDR bytes as received, never decoded) to the driver's topics and the
-planner's path on a node of its own, spun by a thread of its own, and writes them with rosbags' rosbag2 Writer
+planner's path on a node of its own, spun by a thread of its own with rclpy's EventsExecutor (a quarter of
+the SingleThreadedExecutor's CPU a message: ``python -m bench bag``), and writes them with rosbags' rosbag2 Writer
 (MCAP storage, zstd chunks): a directory with ``metadata.yaml`` and ``<name>.mcap``, which Foxglove, ``ros2 bag``
 and the ``mcap`` tools read. A topic nothing publishes is absent from the bag. Message definitions come from
 rosbags' Jazzy typestore, or else from the installed interface files (``share/<package>/msg/*.msg`` under
@@ -24,7 +25,7 @@ from dataclasses import dataclass
 from pathlib import Path
 
 from rclpy.context import Context
-from rclpy.executors import SingleThreadedExecutor
+from rclpy.experimental import EventsExecutor
 from rclpy.node import Node
 from rclpy.qos import DurabilityPolicy, QoSProfile, ReliabilityPolicy
 
@@ -187,7 +188,7 @@ class BagRecorder:
                 offered = [i.qos_profile for i in self._node.get_publishers_info_by_topic(topic.name)]
                 self._node.create_subscription(msg_type, topic.name, lambda data, t=topic: self._on_message(t, data),
                                                subscription_qos(topic, offered), raw=True)
-            executor = SingleThreadedExecutor(context=self.context)
+            executor = EventsExecutor(context=self.context)
             executor.add_node(self._node)
             self._spinner = SpinThread(executor, 'bag_recorder').start()
         except BaseException:

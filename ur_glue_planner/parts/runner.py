@@ -12,7 +12,8 @@ on a ROS domain of its own; then
    lays).
 
 Both beads are judged against the line where the bead belongs on that part (``judge.py``) and written to
-``<out>/part_NNN/result.json``; ur_sim is stopped. Parts run ``--jobs`` at a time, each worker a process of its
+``<out>/part_NNN/result.json``, each run recorded as a rosbag2 in ``bag_corrected`` / ``bag_uncorrected`` beside it
+(``--no-bags``: not recorded); ur_sim is stopped. Parts run ``--jobs`` at a time, each worker a process of its
 own (``--worker k/K``) on a ROS domain of its own (ROS_DOMAIN_ID + k); the runner prints a line per part as it
 finishes and writes ``<out>/summary.json`` and ``<out>/index.html`` at the end. Exit codes: 0 every accepted part
 met the goal with correction, 1 one did not (or a part was not run), 2 bad arguments, 130 interrupted.
@@ -76,6 +77,7 @@ class PartsRun:
     limits: VariationLimits
     domain_id: int
     real_time_factor: float = REAL_TIME_FACTOR
+    bags: bool = True  # each run recorded as a rosbag2 (MCAP) in part_NNN/bag_corrected and bag_uncorrected
 
 
 @contextmanager
@@ -189,13 +191,15 @@ def run_part(config: PartsRun, index: int, nominal_plan: GluePlan, stop: threadi
                     record['corrected'] = refused(reason)
                 else:
                     lap('plan')
-                    outcome, run = execute(ur, plan, stop, log=log, gun=gun, bead=bead, record=False)
+                    outcome, run = execute(ur, plan, stop, log=log, gun=gun, bead=bead, record=config.bags,
+                                           bag_dir=folder / 'bag_corrected')
                     lap('corrected')
                     record['corrected'] = _judged(plan, run, outcome, part, nominal_plan)
                     lap('judge')
                 plan = plan_job(job, ur.joint_state().q)
                 lap('plan_nominal')
-                outcome, run = execute(ur, plan, stop, log=log, gun=gun, bead=bead, record=False)
+                outcome, run = execute(ur, plan, stop, log=log, gun=gun, bead=bead, record=config.bags,
+                                       bag_dir=folder / 'bag_uncorrected')
                 lap('uncorrected')
                 record['uncorrected'] = _judged(plan, run, outcome, part, nominal_plan)
                 lap('judge_uncorrected')
@@ -245,10 +249,15 @@ def run_worker(config: PartsRun, worker: int, workers: int, stop: threading.Even
 
 
 def _worker_command(config: PartsRun, args: argparse.Namespace, worker: int, workers: int) -> list[str]:
-    return [sys.executable, '-m', 'ur_glue_planner.parts.command', '--parts', str(config.count), '--seed',
-            str(config.seed), '--out', str(config.out_dir), '--placement-mm', str(args.placement_mm),
-            '--rotation-deg', str(args.rotation_deg), '--shape-mm', str(args.shape_mm), '--real-time-factor',
-            str(config.real_time_factor), '--worker', f'{worker}/{workers}'] + (['--job', args.job] if args.job else [])
+    command = [sys.executable, '-m', 'ur_glue_planner.parts.command', '--parts', str(config.count), '--seed',
+               str(config.seed), '--out', str(config.out_dir), '--placement-mm', str(args.placement_mm),
+               '--rotation-deg', str(args.rotation_deg), '--shape-mm', str(args.shape_mm), '--real-time-factor',
+               str(config.real_time_factor), '--worker', f'{worker}/{workers}']
+    return command + (['--job', args.job] if args.job else []) + ([] if config.bags else ['--no-bags'])
+
+
+def _mm(value: float | None) -> str:
+    return 'none (no part accepted)' if value is None else f'{value:.2f} mm'
 
 
 def write_summary(config: PartsRun, records: list[dict], seconds: float, failed: list[dict]) -> dict:
@@ -301,7 +310,7 @@ def run_parts(config: PartsRun, args: argparse.Namespace, workers: int, stop: th
     c = summary['corrected']
     print(f"{len(done)} of {config.count} parts in {summary['wall_seconds']:.0f} s. Corrected: {c['meeting_goal']} of "
           f"{c['accepted']} accepted parts meet the goal, {c['refused']} refused; worst lateral p95 "
-          f"{c['lateral_p95_mm']} mm. Report: {(config.out_dir / 'index.html').resolve()}", flush=True)
+          f"{_mm(c['lateral_p95_mm'])}. Report: {(config.out_dir / 'index.html').resolve()}", flush=True)
     if len(done) < config.count:
         print(f'ur_glue_planner: {config.count - len(done)} parts were not judged ({len(failed)} failed, see '
               f'summary.json "failed"; worker exit status {[p.returncode for p in procs]})', file=sys.stderr)
@@ -323,6 +332,8 @@ def parse(argv: list[str]) -> tuple[argparse.Namespace, list[str]]:
     p.add_argument('--jobs', type=int, default=2, help='parts run at the same time (default 2)')
     p.add_argument('--real-time-factor', type=float, default=REAL_TIME_FACTOR,
                    help=f'ur_sim real_time_factor (default {REAL_TIME_FACTOR:g})')
+    p.add_argument('--no-bags', dest='bags', action='store_false',
+                   help='do not record the runs as rosbag2 (default: part_NNN/bag_corrected, bag_uncorrected)')
     p.add_argument('--worker', default=None, help=argparse.SUPPRESS)  # k/K: one of the runner's own processes
     return p.parse_known_args(argv)
 
@@ -348,8 +359,9 @@ def main(argv: list[str]) -> int:
     domain = int(os.environ.get('ROS_DOMAIN_ID', '') or DOMAIN_BASE)
     if args.worker is not None:
         worker, workers = (int(x) for x in args.worker.split('/'))
-        config = PartsRun(args.parts, args.seed, Path(args.out), job, limits, domain, args.real_time_factor)
+        config = PartsRun(args.parts, args.seed, Path(args.out), job, limits, domain, args.real_time_factor,
+                          args.bags)
         return run_worker(config, worker, workers, stop)
     config = PartsRun(args.parts, args.seed, Path(args.out), job, limits, min(domain, 233 - args.jobs),
-                      args.real_time_factor)
+                      args.real_time_factor, args.bags)
     return run_parts(config, args, min(args.jobs, args.parts), stop)

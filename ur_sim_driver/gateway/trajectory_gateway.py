@@ -20,6 +20,7 @@ import itertools
 import signal
 import sys
 import threading
+import time
 from multiprocessing.connection import Connection
 
 import rclpy
@@ -51,13 +52,12 @@ from ur_sim_driver.gateway.trajectory_cdr import read_joint_trajectory
 from ur_sim_driver.motion import conversions as conv
 from ur_sim_driver.motion import passthrough, result_codes
 from ur_sim_driver.motion.command_arrays import CommandArrays, from_points
+from ur_sim_driver.motion.start_stamp import far_start
 from ur_sim_driver.motion.tolerances import resolve_tolerances
 from ur_sim_driver.motion.validation import validate_trajectory
 
 # From this many points on, the memory of a received trajectory is handed back to the system when it is done.
 LARGE_TRAJECTORY = 10_000
-# A start stamp this far ahead of the simulated clock is accepted (upstream does) but logged [s].
-FAR_FUTURE = 5.0
 # How long a goal or message waits for the simulation's Admission [s of wall time]: the simulation answers from
 # its receiving thread at once, so only a simulation that is gone or hung takes this long.
 ADMIT_TIMEOUT = 10.0
@@ -152,12 +152,10 @@ class TrajectoryGateway:
             q_max=cfg.q_max if strict else None, v_max=cfg.v_max if strict else None,
             allow_partial=cfg.allow_partial and not self.passthrough,
             allow_nonzero_end_velocity=cfg.allow_nonzero_end_velocity or self.passthrough)
-        if reason is None and cmd.header_stamp - now > FAR_FUTURE:
-            self.log.warning(
-                f'{what} starts at header.stamp {cmd.header_stamp:.3f} s, {cmd.header_stamp - now:.1f} s after '
-                f'the simulated time now ({now:.3f} s); it waits until then. A client stamping with its wall '
-                'clock while ur_sim runs on simulated time (use_sim_time:=true for the client) is the likely '
-                'cause; a zero stamp starts at once.')
+        if reason is None:
+            note = far_start(cmd.header_stamp, now, time.time())
+            if note is not None:
+                (self.log.warning if note.wall_clock else self.log.info)(f'{what} {note.text}')
         return reason
 
     def _on_goal(self, goal: FollowJointTrajectory.Goal) -> GoalResponse:
