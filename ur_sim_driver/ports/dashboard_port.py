@@ -9,6 +9,10 @@ either way is one robot's state. Each command is handled under the simulation lo
 
 Lines end with ``\\n`` (a ``\\r`` before it is dropped); a line longer than ``MAX_LINE`` bytes closes the connection,
 so that a client that never sends a newline cannot hold memory.
+
+A PolyScope X robot (software 10.x) has no dashboard server: its Robot API (HTTP) replaces it, and nothing listens
+on port 29999 (URSim's start script does not even forward the port for PolyScope X). :class:`DashboardPort` then
+refuses to open, with :class:`PortError` saying so.
 """
 from __future__ import annotations
 
@@ -16,7 +20,7 @@ import socket
 import threading
 from collections.abc import Callable
 
-from ur_sim_driver.ports.tcp_port import TcpPort
+from ur_sim_driver.ports.tcp_port import PortError, TcpPort
 from ur_sim_driver.robot.dashboard_server import DashboardServer
 
 WELCOME = 'Connected: Universal Robots Dashboard Server'
@@ -33,11 +37,14 @@ class DashboardPort:
         log: called with a line for the log when a command is refused (the reason, which the answer does not give).
 
     Raises:
-        PortError: the address cannot be listened on.
+        PortError: the address cannot be listened on, or the robot runs PolyScope X (no dashboard server).
     """
 
     def __init__(self, host: str, port: int, server: DashboardServer, lock: threading.Lock,
                  log: Callable[[str], None] = lambda _: None) -> None:
+        if server.version.polyscope_x:
+            raise PortError(f'dashboard server: not on {host}:{port}, PolyScope X {server.version.dotted()} has none '
+                            '(its Robot API replaces it)')
         self._server, self._lock, self._log = server, lock, log
         self._port = TcpPort('dashboard server', host, port, self._serve)
 

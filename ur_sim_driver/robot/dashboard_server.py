@@ -5,8 +5,10 @@ matches the answers. :class:`DashboardServer` answers the same commands with the
 server documentation for CB3 and e-series, as the Universal Robots Client Library expects it), changing the robot
 state as the robot would. Commands are case-insensitive, as on the robot. A command the robot's software version
 does not know yet (``software.COMMANDS``), and any unknown command, gets the server's "could not understand"
-answer. Flight reports and support files are written into the robot's file system, a directory given to the
-server. Call :meth:`DashboardServer.handle` under the simulation lock.
+answer. In local control (an e-series in MANUAL mode) the commands that act on the robot get the robot's remote
+control refusal (``robot/dashboard_roles.py``). Flight reports and support files are written into the robot's file
+system, a directory given to the server. A PolyScope X robot (10.x) has no dashboard server: its Robot API
+(:attr:`DashboardServer.robot_api`) answers instead. Call :meth:`DashboardServer.handle` under the simulation lock.
 """
 from __future__ import annotations
 
@@ -18,6 +20,8 @@ from dataclasses import dataclass
 from pathlib import Path
 
 from ur_sim_driver.description.params import load_ur_params
+from ur_sim_driver.robot.dashboard_roles import OPERATIONAL_MODES, REMOTE_REFUSAL, USER_ROLES, OperatorControls
+from ur_sim_driver.robot.robot_api import RobotApi
 from ur_sim_driver.robot.robot_state import (
     PLAYING,
     PROGRAM_DIR,
@@ -30,8 +34,7 @@ from ur_sim_driver.robot.software import COMMANDS, SoftwareVersion, default_vers
 INSTALLATIONS = ('default.installation',)  # installation files on the simulated robot
 UNLOCK_REFUSED = ('Cannot unlock protective stop until 5s after occurrence. '
                   'Always inspect cause of protective stop before unlocking')
-OPERATIONAL_MODES = ('MANUAL', 'AUTOMATIC')  # e-series: set by the dashboard or the teach pendant
-USER_ROLES = ('PROGRAMMER', 'OPERATOR', 'NONE', 'LOCKED', 'RESTRICTED')  # CB3's setUserRole
+__all__ = ['OPERATIONAL_MODES', 'USER_ROLES', 'DashboardServer', 'Reply']
 REPORT_TYPES = ('controller', 'software', 'system')  # generate flight report <type>
 SERIAL_NUMBER = '20260000001'  # [digits] a UR serial number starts with its year of manufacture
 
@@ -63,9 +66,17 @@ class DashboardServer:
         self.installation = INSTALLATIONS[0]
         self.log: list[str] = []  # messages added with addToLog
         self.popup: str | None = None  # text of the popup shown on the (simulated) teach pendant
-        self.operational_mode = 'AUTOMATIC'
-        self.user_role = 'PROGRAMMER'
+        self.controls = OperatorControls(self.version.e_series)  # user role, operational mode, remote control
+        self.robot_api = RobotApi(robot, self.version, files) if self.version.polyscope_x else None
         self._reports = 0
+
+    @property
+    def user_role(self) -> str:
+        return self.controls.user_role
+
+    @property
+    def operational_mode(self) -> str:
+        return self.controls.operational_mode
 
     def handle(self, line: str) -> Reply:
         """Answer one command line (without the newline)."""
@@ -75,6 +86,9 @@ class DashboardServer:
             (prefix for prefix, _ in _WITH_ARGUMENT if key == prefix or key.startswith(prefix + ' ')), None)
         if command is not None and not self._knows(command):
             return Reply(f"could not understand: '{text}'", f'software {self.version.dotted()} does not know it')
+        refusal = None if command is None else self.controls.refusal(command)
+        if refusal is not None:
+            return Reply(REMOTE_REFUSAL, refusal)
         if command in _SIMPLE:
             return _SIMPLE[command](self)
         if command is not None:
@@ -178,22 +192,21 @@ class DashboardServer:
         return Reply(self.version.dotted())
 
     def _clear_operational_mode(self) -> Reply:
+        self.controls.clear_operational_mode()
         return Reply('No longer controlling the operational mode. '
                      f"Current operational mode: '{self.operational_mode}'.")
 
     def _set_operational_mode(self, mode: str) -> Reply:
-        if mode.upper() not in OPERATIONAL_MODES:
-            return Reply(f"Failed setting operational mode: '{mode}'",
-                         f'operational mode {mode!r} is not one of {", ".join(m.lower() for m in OPERATIONAL_MODES)}')
-        self.operational_mode = mode.upper()
+        refusal = self.controls.set_operational_mode(mode)
+        if refusal:
+            return Reply(f"Failed setting operational mode: '{mode}'", refusal)
         return Reply(f"Operational mode '{mode}' is set")
 
     def _set_user_role(self, role: str) -> Reply:
-        if role.upper() not in USER_ROLES:
-            return Reply(f"Failed setting user role: '{role}'",
-                         f'user role {role!r} is not one of {", ".join(r.lower() for r in USER_ROLES)}')
-        self.user_role = role.upper()
-        return Reply(f'Setting user role: {role}')
+        refusal = self.controls.set_user_role(role)
+        if refusal:
+            return Reply(f"Failed setting user role: '{role}'", refusal)
+        return Reply(f'Setting user role: {role or "none"}')  # without a role: NONE
 
     def _flight_report(self, report_type: str) -> Reply:
         kind = (report_type or 'system').lower()
@@ -256,7 +269,7 @@ _SIMPLE = {
     'programstate': DashboardServer._program_state,
     'get loaded program': DashboardServer._loaded_program,
     'isprogramsaved': DashboardServer._program_saved,
-    'is in remote control': _fixed('true'),  # dashboard commands are accepted: the robot is in remote control
+    'is in remote control': lambda server: Reply(str(server.controls.remote_control).lower()),
     'clear operational mode': DashboardServer._clear_operational_mode,
     'get operational mode': lambda server: Reply(server.operational_mode),
     'getuserrole': lambda server: Reply(server.user_role),

@@ -1,17 +1,22 @@
 """The simulated controller's software: its version (PolyScope / CB3 software), and which dashboard commands that
 version's dashboard server knows.
 
-A real CB3 runs software 3.x, an e-series PolyScope 5.x, and the newer types PolyScope X 10.x. The dashboard
-server of each version knows the commands that version introduced and no others; the driver's client library
+A real CB3 runs software 3.x, an e-series PolyScope 5.x; e-series and UR Series types can run PolyScope X 10.x
+instead (from the first release of the type's ``software.polyscope_x`` in config/ur_types). The dashboard server of
+each CB3 / PolyScope 5 version knows the commands that version introduced and no others; the driver's client library
 (Universal Robots Client Library 2.14, ``dashboard_client_implementation_g5.cpp``) checks the same minimum versions
-before it sends a command. :data:`COMMANDS` holds those minima, one table for both sides. No rclpy here.
+before it sends a command. :data:`COMMANDS` holds those minima, one table for both sides. PolyScope X has no
+dashboard server: its Robot API (HTTP) replaces it (``robot/robot_api.py``). No rclpy here.
 """
 from __future__ import annotations
 
 import re
+from functools import cache
 from typing import NamedTuple
 
-from ur_sim_driver.description.params import load_ur_params
+import yaml
+
+from ur_sim_driver.description.params import config_dir, load_ur_params
 from ur_sim_driver.errors import ConfigError
 
 
@@ -32,6 +37,11 @@ class SoftwareVersion(NamedTuple):
         """PolyScope 5 or later (the client library's isESeries: major >= 5)."""
         return self.major >= 5
 
+    @property
+    def polyscope_x(self) -> bool:
+        """PolyScope X (10.x): the Robot API instead of a dashboard server."""
+        return self.major >= 10
+
     def dotted(self) -> str:
         """As the dashboard server's `PolyscopeVersion` answer writes it: major.minor.bugfix.build."""
         return f'{self.major}.{self.minor}.{self.bugfix}.{self.build}'
@@ -49,8 +59,35 @@ def default_version(ur_type: str) -> SoftwareVersion:
     return SoftwareVersion(*load_ur_params(ur_type).software_default)
 
 
+def polyscope_x_minimum(ur_type: str) -> SoftwareVersion | None:
+    """The first PolyScope X release that runs `ur_type` (its file's ``software.polyscope_x``), None for a type that
+    runs no PolyScope X (the CB3s)."""
+    return _polyscope_x(load_ur_params(ur_type).name)
+
+
+@cache
+def _polyscope_x(name: str) -> SoftwareVersion | None:
+    # load_ur_params reads the fields every type has; this one only the PolyScope X types have.
+    raw = yaml.safe_load((config_dir() / f'{name}.yaml').read_text())
+    text = (raw.get('software') or {}).get('polyscope_x')
+    return None if text is None else _v(str(text))
+
+
+def runs(ur_type: str) -> str:
+    """What software `ur_type` runs, for messages: e.g. '5.x (PolyScope 5) from 5.0.0 or 10.x (PolyScope X) from
+    10.7.0'."""
+    params = load_ur_params(ur_type)
+    first = SoftwareVersion(*params.software_minimum)
+    if params.series == 'cb3':
+        return f'3.x (CB3 software) from {first.major}.{first.minor}'
+    x = polyscope_x_minimum(ur_type)
+    tail = '' if x is None else f' or 10.x (PolyScope X) from {x.major}.{x.minor}.{x.bugfix}'
+    return f'5.x (PolyScope 5) from {first.major}.{first.minor}.{first.bugfix}{tail}'
+
+
 def parse_version(text: str, ur_type: str) -> SoftwareVersion:
-    """`software_version` as given ('5.12.6', '3.15.8.0', or '' for the type's default) for a robot of `ur_type`.
+    """`software_version` as given ('5.12.6', '3.15.8.0', '10.12.0', or '' for the type's default) for a robot of
+    `ur_type`.
 
     Raises:
         ConfigError: naming the parameter, the value and what the robot type runs.
@@ -59,20 +96,18 @@ def parse_version(text: str, ur_type: str) -> SoftwareVersion:
         return default_version(ur_type)
     params = load_ur_params(ur_type)
     match = re.fullmatch(r'(\d+)\.(\d+)\.(\d+)(?:\.(\d+))?', text.strip())
-    cb3 = params.series == 'cb3'
-    first = SoftwareVersion(*params.software_minimum)
-    runs = (f'3.x (CB3 software) from {first.major}.{first.minor}' if cb3
-            else f'5.x (PolyScope 5) from {first.major}.{first.minor}.{first.bugfix}')
     if match is None:
         raise ConfigError(f"parameter 'software_version' = {text!r} is not a version: major.minor.bugfix[.build], "
-                          f"e.g. {default_version(ur_type).dotted()}")
+                          f'e.g. {default_version(ur_type).dotted()}')
     version = SoftwareVersion(*(int(g or 0) for g in match.groups()))
-    if version.major >= 10:
-        raise ConfigError(f"parameter 'software_version' = {text!r} is PolyScope X, which ur_sim does not simulate "
-                          f'yet; {ur_type} runs {runs}')
-    if (version.major == 3) != cb3 or version.major not in (3, 5) or version[:3] < first[:3]:
-        raise ConfigError(f"parameter 'software_version' = {text!r} does not run on a {ur_type}: it runs {runs}")
-    return version
+    first = SoftwareVersion(*params.software_minimum)
+    x_first = polyscope_x_minimum(ur_type)
+    if version.major == 10 and x_first is not None and version[:3] >= x_first[:3]:
+        return version
+    if version.major == (3 if params.series == 'cb3' else 5) and version[:3] >= first[:3]:
+        return version
+    raise ConfigError(f"parameter 'software_version' = {text!r} does not run on a {ur_type}: it runs "
+                      f'{runs(ur_type)}')
 
 
 class Minimum(NamedTuple):
@@ -112,6 +147,13 @@ COMMANDS: dict[str, Minimum] = {
     **dict.fromkeys(('get operational mode', 'is in remote control'), _minimum('5.6.0', '5.6.0')),
     'version': _minimum('5.0.0', '5.0.0'),
 }
+
+
+# PolyScope X: the driver's dashboard client connects from 10.11.0 on (dashboard_client_ros.cpp exits on older
+# versions); the Robot API 3.1.4 of 10.12.0 adds the state queries and the program services (the client library's
+# DashboardClientImplX refuses them on an older Robot API).
+DASHBOARD_X = _v('10.11.0')
+ROBOT_API_QUERIES = _v('10.12.0')
 
 
 def required(command: str, version: SoftwareVersion) -> SoftwareVersion | None:

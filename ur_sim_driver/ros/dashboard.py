@@ -12,7 +12,8 @@ the client library's "Expected: <pattern>, but received: <answer>". ur_sim does 
 Before sending, the client library checks that the robot's software version knows the command
 (``robot/software.py``) and answers with its version-mismatch text if not; the program services of PolyScope X
 (get_programs, upload_program, update_program, download_program) answer "Not implemented for this robot software
-version." on CB3 and PolyScope 5, as the driver's do.
+version." on CB3 and PolyScope 5, as the driver's do. On PolyScope X (10.x) the services are the driver's
+POLYSCOPE_X ones over the robot's Robot API (``ros/dashboard_polyscope_x.py``).
 """
 from __future__ import annotations
 
@@ -65,6 +66,7 @@ from ur_sim_driver.ros.dashboard_commands import (
     Command,
     NotConnected,
 )
+from ur_sim_driver.ros.dashboard_polyscope_x import configure_polyscope_x
 
 __all__ = ['NOT_CONNECTED', 'NOT_IMPLEMENTED', 'DashboardClient']
 
@@ -90,6 +92,9 @@ class DashboardClient(Component):
         if not self.connected:
             node.get_logger().info('Dashboard client started with autoconnect disabled. Call the ~/connect service '
                                    'to connect to the simulated robot.')
+        if self.server.version.polyscope_x:  # the Robot API instead of a dashboard server
+            configure_polyscope_x(self, node)
+            return
         for name, command in TRIGGERS.items():
             node.create_service(Trigger, f'~/{name}', self._trigger_callback(command))
         node.create_service(Trigger, '~/connect', self._on_connect)
