@@ -1,17 +1,22 @@
 """force_mode_controller over DDS in lockstep: upstream's refusals (inactive, zero quaternion, unknown frame, type,
 damping, gain scaling) and its scenario (a task frame in tool0_controller, 10 N along a compliant axis: the TCP moves
 along that axis and holds the others), pressing on the floor with the requested force, and force mode ending with
-stop_force_mode and with the controller's deactivation (the robot then holds still where it was)."""
+stop_force_mode and with the controller's deactivation (the robot then holds still where it was), and the deviation
+limits: a push on the arm (``/ur_sim/apply_wrench``) that deviates a non-compliant axis within its limit changes
+nothing, one beyond it is the robot's protective stop, recovered from as a user does (unlock protective stop)."""
 import numpy as np
 import pytest
 from cm_helpers import ControllerManagerClient
+from geometry_msgs.msg import WrenchStamped
 from scipy.spatial.transform import Rotation
-from sim_harness import point, running_sim, wait_answer, wait_still
+from sim_harness import point, running_sim, wait_answer, wait_for, wait_still
 from std_srvs.srv import Trigger
+from ur_dashboard_msgs.msg import SafetyMode
 from ur_msgs.srv import SetForceMode
 
 from ur_sim_driver.description.analytic_ik import UrAnalyticIK, nearest_branch
 from ur_sim_driver.description.tool import get_tool
+from ur_sim_driver.robot.robot_state import NORMAL, PROTECTIVE_STOP
 
 pytestmark = pytest.mark.timeout(300)
 NAME = 'force_mode_controller'
@@ -145,3 +150,93 @@ def test_deactivation_ends_force_mode_and_the_robot_holds_still(rig):
     h.wait_sim_time(0.5)
     assert abs(tcp(h)[0][2] - z0) < 1e-6
     assert cm.switch(activate=[SCALED]).ok
+
+
+# A push on wrist_3_link (not felt by the flange's sensor, so compliance does not yield to it): what it deviates the
+# held TCP by, measured with this robot's servo at AWAY: 20 N along base y about 0.11 mm along y, 80 N about 0.44 mm;
+# a torque of 2 N m about base z about 0.004 rad about z, 8 N m about 0.016 rad.
+PUSHES = {
+    'translation': ([0.25e-3] * 3 + [0.05] * 3, (0.0, 20.0, 0.0, 0.0, 0.0, 0.0), (0.0, 80.0, 0.0, 0.0, 0.0, 0.0),
+                    'mm along y (limit 0.25 mm)'),
+    'rotation': ([1e-3] * 3 + [0.01] * 3, (0.0, 0.0, 0.0, 0.0, 0.0, 2.0), (0.0, 0.0, 0.0, 0.0, 0.0, 8.0),
+                 'rad about z (limit 0.0100 rad)'),
+}
+
+
+def push(h, publisher, log, wrench) -> None:
+    """Push wrist_3_link with `wrench` (force [N], torque [N m]; base axes) from now until the next push, the
+    simulation held still until ur_sim has taken it (its log line)."""
+    msg = WrenchStamped()
+    msg.header.frame_id = 'wrist_3_link'
+    f, t = msg.wrench.force, msg.wrench.torque
+    f.x, f.y, f.z, t.x, t.y, t.z = wrench
+    seen = len(log)
+    publisher.publish(msg)
+    wait_still(lambda: any(n == 'ur_sim_wrench' and x.startswith('push on wrist_3_link') for n, x in log[seen:]),
+               what='the push taken')
+
+
+@pytest.fixture(scope='module')
+def pusher(rig):
+    """A publisher on ``/ur_sim/apply_wrench`` (it lives as long as the client node)."""
+    h = rig[0]
+    publisher = h.client.create_publisher(WrenchStamped, '/ur_sim/apply_wrench', 10)
+    wait_still(lambda: publisher.get_subscription_count() > 0, what='the apply_wrench subscriber')
+    return publisher
+
+
+@pytest.mark.parametrize('case', PUSHES)
+def test_a_deviation_beyond_the_limit_is_a_protective_stop(rig, pusher, case):
+    h, cm, start, stop = rig
+    limits, within, beyond, text = PUSHES[case]
+    robot, force_mode = h.sim.robot, h.sim._force_mode
+    log = h.rosout()
+    safety = []
+    stop_listening = h.listen(SafetyMode, '/io_and_status_controller/safety_mode', lambda m: safety.append(m.mode),
+                              latched=True)
+    try:
+        _move(h, AWAY)
+        h.wait_sim_time(1.0)  # at rest: the hold starts without the trajectory's last motion
+        wait_for(lambda: safety, what='the latched safety mode')
+        in_charge(cm)
+        req = request(force=(0.0, 0.0, 0.0))  # compliant along z, pushing nothing: every other axis held
+        req.deviation_limits = limits
+        assert call(start, req).success
+
+        push(h, pusher, log, within)
+        h.wait_sim_time(1.0)
+        assert robot.safety_mode == NORMAL and force_mode.spec is not None and safety[-1] == SafetyMode.NORMAL
+
+        push(h, pusher, log, beyond)
+        wait_for(lambda: robot.safety_mode == PROTECTIVE_STOP, timeout=0.5, what='the protective stop')
+        assert 'force mode' in robot.stop_cause and text in robot.stop_cause
+        assert robot.stop_cause.count('(limit ') == 1  # the one axis pushed beyond
+        wait_for(lambda: safety[-1] == SafetyMode.PROTECTIVE_STOP and not force_mode.active,
+                 what='the stop published and the controller_stopper having deactivated force_mode_controller')
+        assert force_mode.spec is None  # force mode ended with the stop
+        push(h, pusher, log, (0.0,) * 6)  # the hand lets go: the arm stays where it stopped
+        h.wait_sim_time(0.5)
+        held = tcp(h)[0]
+        h.wait_sim_time(0.5)
+        assert np.linalg.norm(tcp(h)[0] - held) < 1e-5
+
+        refused = h.keeper.call('unlock_protective_stop')  # within 5 s of the stop the robot refuses
+        assert not refused.success and robot.safety_mode == PROTECTIVE_STOP
+        wait_for(lambda: robot.unlock_wait() == 0.0, what='the 5 s before a protective stop may be unlocked')
+        assert h.keeper.call('unlock_protective_stop').success
+        wait_for(lambda: safety[-1] == SafetyMode.NORMAL, what='NORMAL published')
+        assert not robot.program_running  # the stop paused the program: the driver (headless) sends it again
+        assert h.keeper.call('resend_robot_program').success
+        wait_for(lambda: force_mode.active, what="the controller_stopper's activating force_mode_controller again")
+        assert force_mode.spec is None  # its activation does not restart force mode
+        h.wait_sim_time(0.5)
+        assert np.linalg.norm(tcp(h)[0] - held) < 1e-5
+        assert any(n == NAME and x.startswith('PROTECTIVE_STOP: force mode') and text in x for n, x in log)
+        assert call(start, req).success  # force mode starts again, the robot holds within the limits
+        h.wait_sim_time(0.5)
+        assert robot.safety_mode == NORMAL and force_mode.spec is not None
+        assert call(stop, Trigger.Request()).success
+        assert cm.switch(activate=[SCALED], deactivate=[NAME]).ok
+    finally:
+        push(h, pusher, log, (0.0,) * 6)
+        stop_listening()

@@ -13,8 +13,12 @@ passthrough trajectory controller only (``ur_hardware.py``).
 The robot's side is ``motion/force_mode.py``: each cycle the compliant axes' velocity follows from the wrench the
 robot applies (the flange's force-torque reading, negated) and becomes an offset of the active controller's joint
 reference (through the tool's Jacobian), so the other axes follow the program. When force mode ends the robot
-holds where it left the reference. Not simulated: the deviation limits (the robot's protective stop when a
-non-compliant axis deviates further); CB3 robots ignore the gain scaling, with upstream's warning.
+holds where it left the reference. Each cycle the TCP (tool0) as measured is compared with where the last cycle's
+reference puts it: a non-compliant axis of the force frame deviating further than its deviation limit is the
+robot's protective stop (``RobotState.protective_stop``, its cause naming the axis, the deviation and the limit;
+logged as the simulation loop logs a contact's). Force mode ends with it and the robot holds where it stopped; the
+driver's controller_stopper then deactivates the controller, and activates it again once the stop is unlocked,
+without force mode. CB3 robots ignore the gain scaling, with upstream's warning.
 """
 from __future__ import annotations
 
@@ -24,13 +28,13 @@ from scipy.spatial.transform import Rotation
 from std_srvs.srv import Trigger
 from ur_msgs.srv import SetForceMode
 
-from ur_sim_driver.controllers.base import Component, Host
+from ur_sim_driver.controllers.base import Component, Cycle, Host
 from ur_sim_driver.controllers.ur_hardware import FORCE_MODE
 from ur_sim_driver.description.analytic_ik import UrAnalyticIK
 from ur_sim_driver.description.frames import frame_poses, pose_between
 from ur_sim_driver.description.tool import get_tool
 from ur_sim_driver.description.urdf import kinematic_tree
-from ur_sim_driver.motion.force_mode import ForceModeSpec, admittance_step, force_frame
+from ur_sim_driver.motion.force_mode import ForceModeSpec, admittance_step, deviation, deviation_cause, force_frame
 from ur_sim_driver.motion.trajectory import TrajectorySample
 from ur_sim_driver.physics.physics import ArmState
 from ur_sim_driver.robot.sim_config import SimConfig
@@ -66,6 +70,9 @@ class ForceModeController(Component):
         self._velocity = np.zeros(6)  # the compliant axes' velocity, force frame [m/s, rad/s]
         self._offset: np.ndarray | None = None  # (n,) the joint offset force mode adds to the reference [rad]
         self._hold: np.ndarray | None = None  # where the robot holds once force mode has ended [rad]
+        self._target: np.ndarray | None = None  # (4, 4) the TCP's pose in base by the last cycle's reference
+        self._halt = False  # a deviation stopped the robot: it holds where it is from the next cycle on
+        self._stop_cause: str | None = None  # that stop's cause, logged outside the lock
 
     def interfaces(self, cfg: SimConfig) -> tuple[tuple[str, ...], tuple[str, ...]]:
         p = f'{cfg.tf_prefix}{FORCE_MODE}/'
@@ -163,15 +170,24 @@ class ForceModeController(Component):
         if self.spec is not None and self._offset is not None:
             self._hold = self._offset  # taken by the loop: the reference plus the offset, held
         self.spec = None
+        self._target = None
 
     def take_hold(self, sample: TrajectorySample, state: ArmState) -> ArmState | None:
         """Once force mode has ended: the state the commander takes over from (`state` at the joint positions where
-        force mode left the reference, at rest), else None."""
+        force mode left the reference, at rest; after a deviation's protective stop where the arm is), else None."""
+        if self._halt:
+            self._halt = False
+            return ArmState(state.t, state.q.copy(), np.zeros_like(state.q), state.effort)
         if self._hold is None:
             return None
         q = sample.positions + self._hold
         self._hold = self._offset = None
         return ArmState(state.t, q, np.zeros_like(q), state.effort)
+
+    def update(self, cycle: Cycle) -> None:
+        cause, self._stop_cause = self._stop_cause, None
+        if cause is not None:  # the text the simulation loop logs for its own protective stops
+            self.node.get_logger().error(f'PROTECTIVE_STOP: {cause}')
 
     def apply(self, sample: TrajectorySample, stop: np.ndarray | None, tcp_position: np.ndarray,
               tcp_velocity: np.ndarray, tcp_quaternion: np.ndarray, wrench: np.ndarray,
@@ -186,6 +202,12 @@ class ForceModeController(Component):
         if self._offset is None:
             self._offset = np.zeros_like(sample.positions)
         r = force_frame(spec, tcp_position, tcp_velocity)
+        if self._target is not None:  # the TCP now against where the program holds it now
+            actual = np.eye(4)
+            actual[:3, :3], actual[:3, 3] = tcp_rotation, tcp_position
+            cause = deviation_cause(spec, deviation(r, actual, self._target))
+            if cause is not None:
+                return self._deviated(sample, stop, cause)
         applied_base = -np.concatenate((tcp_rotation @ wrench[:3], tcp_rotation @ wrench[3:]))
         applied = np.concatenate((r.T @ applied_base[:3], r.T @ applied_base[3:]))
         self._velocity = admittance_step(spec, self._velocity, applied, dt)
@@ -195,4 +217,15 @@ class ForceModeController(Component):
         qd = j.T @ np.linalg.solve(j @ j.T + _SINGULAR ** 2 * np.eye(6), twist)
         self._offset = self._offset + qd * dt
         moved = sample._replace(positions=sample.positions + self._offset, velocities=sample.velocities + qd)
+        self._target = self._ik.fk(moved.positions)
         return moved, (moved.positions if stop is not None else None)
+
+    def _deviated(self, sample: TrajectorySample, stop: np.ndarray | None,
+                  cause: str) -> tuple[TrajectorySample, np.ndarray | None]:
+        """The robot's protective stop for a deviation (`cause`): force mode ends, and the arm is held where it is
+        from the next cycle on (this cycle keeps the last reference, as a stop seen in a cycle acts on the next)."""
+        self.host.robot.protective_stop(self.host.sim.time, cause)
+        self._stop_cause = cause
+        held = sample._replace(positions=sample.positions + self._offset, velocities=np.zeros_like(sample.velocities))
+        self.spec, self._target, self._offset, self._hold, self._halt = None, None, None, None, True
+        return held, (held.positions if stop is not None else None)
