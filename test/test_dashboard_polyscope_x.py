@@ -5,7 +5,8 @@ alone, then over DDS."""
 import json
 
 import pytest
-from sim_harness import running_sim, wait_answer, wait_still
+from dashboard_helpers import DashboardServices
+from sim_harness import running_sim
 from std_srvs.srv import Trigger
 from ur_dashboard_msgs.msg import OperationalMode
 from ur_dashboard_msgs.srv import (
@@ -90,27 +91,11 @@ SERVICES = {'power_off': Trigger, 'power_on': Trigger, 'brake_release': Trigger,
             'update_program': UploadProgram, 'download_program': DownloadProgram}
 
 
-class Services:
-    def __init__(self, h) -> None:
-        self.h = h
-        self.clients = {n: h.client.create_client(t, f'/dashboard_client/{n}') for n, t in SERVICES.items()}
-        for name, client in self.clients.items():
-            wait_still(client.service_is_ready, what=f'/dashboard_client/{name}')
-
-    def call(self, name: str, **fields):
-        return wait_answer(self.clients[name].call_async(SERVICES[name].Request(**fields)),
-                           f'the answer of /dashboard_client/{name}')
-
-    def close(self) -> None:
-        for client in self.clients.values():
-            self.h.client.destroy_client(client)
-
-
 @pytest.fixture(scope='module', params=[('ur15', '10.12.0'), ('ur30', '10.11.0')], ids=['10.12.0', '10.11.0'])
 def robot(request):
     ur_type, version = request.param
     with running_sim(ur_type=ur_type, software_version=version) as h:
-        services = Services(h)
+        services = DashboardServices(h, SERVICES)
         try:
             yield h, services
         finally:

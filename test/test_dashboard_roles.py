@@ -2,7 +2,8 @@
 MANUAL mode is in local control and refuses the dashboard commands that act on it, with the robot's answer; a CB3's
 user role restricts its teach pendant but not its dashboard. The interpreter alone, then over DDS."""
 import pytest
-from sim_harness import running_sim, wait_answer, wait_still
+from dashboard_helpers import DashboardServices
+from sim_harness import running_sim
 from std_srvs.srv import Trigger
 from ur_dashboard_msgs.msg import OperationalMode, UserRole
 from ur_dashboard_msgs.srv import (
@@ -91,26 +92,10 @@ SERVICES = {'set_operational_mode': SetOperationalMode, 'get_operational_mode': 
             'get_user_role': GetUserRole, 'raw_request': RawRequest, 'clear_operational_mode': Trigger}
 
 
-class Services:
-    def __init__(self, h) -> None:
-        self.h = h
-        self.clients = {n: h.client.create_client(t, f'/dashboard_client/{n}') for n, t in SERVICES.items()}
-        for name, client in self.clients.items():
-            wait_still(client.service_is_ready, what=f'/dashboard_client/{name}')
-
-    def call(self, name: str, **fields):
-        return wait_answer(self.clients[name].call_async(SERVICES[name].Request(**fields)),
-                           f'the answer of /dashboard_client/{name}')
-
-    def close(self) -> None:
-        for client in self.clients.values():
-            self.h.client.destroy_client(client)
-
-
 @pytest.fixture(scope='module', params=['ur5e', 'ur10'])
 def robot(request):
     with running_sim(ur_type=request.param) as h:
-        services = Services(h)
+        services = DashboardServices(h, SERVICES)
         try:
             yield h, services
         finally:

@@ -4,7 +4,8 @@ for the others; PolyScope X's program services answer "not implemented" on both 
 import zipfile
 
 import pytest
-from sim_harness import running_sim, wait_answer, wait_still
+from dashboard_helpers import DashboardServices
+from sim_harness import running_sim
 from std_srvs.srv import Trigger
 from ur_dashboard_msgs.msg import OperationalMode, SafetyStatus, UserRole
 from ur_dashboard_msgs.srv import (
@@ -40,28 +41,12 @@ def mismatch(command: str, required: str, actual: str) -> str:
             f'actual version: {actual})')
 
 
-class Services:
-    def __init__(self, h) -> None:
-        self.h = h
-        self.clients = {n: h.client.create_client(t, f'/dashboard_client/{n}') for n, t in SERVICES.items()}
-        for name, client in self.clients.items():
-            wait_still(client.service_is_ready, what=f'/dashboard_client/{name}')
-
-    def call(self, name: str, **fields):
-        request = SERVICES[name].Request(**fields)
-        return wait_answer(self.clients[name].call_async(request), f'the answer of /dashboard_client/{name}')
-
-    def close(self) -> None:
-        for client in self.clients.values():
-            self.h.client.destroy_client(client)
-
-
 @pytest.fixture(scope='module', params=[('ur5e', ''), ('ur10', ''), ('ur5e', '5.5.0')],
                 ids=['5.12.6', '3.15.8', '5.5.0'])
 def robot(request):
     ur_type, version = request.param
     with running_sim(ur_type=ur_type, software_version=version) as h:
-        services = Services(h)
+        services = DashboardServices(h, SERVICES)
         try:
             yield h, services, h.sim.cfg.software_version
         finally:
