@@ -756,3 +756,59 @@ def running_sim(lockstep: bool | None = None, paced: bool = False, ros_args: lis
                         _open.remove(harness)
                 if lockstep:
                     _lockstep.pop()
+
+
+def driver_test_launch(tf_prefix: str = '', initial_joint_controller: str = 'scaled_joint_trajectory_controller',
+                       **params):
+    """ur_sim with the launch arguments the driver's own tests give ur_control.launch.py (test_common.py's driver
+    test description): a UR5e, headless mode, the dashboard client, `initial_joint_controller` active, `tf_prefix`;
+    the robot as URSim boots: powered off, its program stopped. `params` adds or overrides ur_sim parameters."""
+    launch = dict(ur_type='ur5e', tf_prefix=tf_prefix, headless_mode=True, launch_dashboard_client=True,
+                  initial_joint_controller=initial_joint_controller, activate_joint_controller=True,
+                  start_powered_off=True)
+    launch.update(params)
+    return running_sim(**launch)
+
+
+# The dashboard calls of the driver's own tests before each scenario (test_common.py's start_robot, then
+# io_and_status_controller/resend_robot_program), in their order.
+START_SEQUENCE = ('close_popup', 'close_safety_popup', 'stop', 'power_off', 'power_on', 'brake_release',
+                  'unlock_protective_stop')
+
+
+def start_robot(h: SimHarness, timeout: float = 10.0) -> None:
+    """Start the robot as the driver's tests do before every scenario, over the services a user has: close the
+    popups, stop the program, power off and on, release the brakes, unlock a protective stop (each answer checked),
+    wait until the dashboard reports the robot mode RUNNING (`timeout` [s] of simulated time, upstream's wait), stop
+    the program again and have the driver send its program (resend_robot_program, headless mode). Returns once the
+    controller_stopper has brought back the controllers it stopped while the program did not run."""
+    from ur_dashboard_msgs.msg import RobotMode
+    from ur_dashboard_msgs.srv import GetRobotMode
+
+    clients = getattr(h, '_start_clients', None)
+    if clients is None:
+        group = ReentrantCallbackGroup()
+        clients = {name: h.client.create_client(Trigger, f'/dashboard_client/{name}', callback_group=group)
+                   for name in START_SEQUENCE}
+        clients['get_robot_mode'] = h.client.create_client(GetRobotMode, '/dashboard_client/get_robot_mode',
+                                                           callback_group=group)
+        clients['resend_robot_program'] = h.client.create_client(
+            Trigger, h.sim.cfg.prefixed('io_and_status_controller/resend_robot_program'), callback_group=group)
+        for client in clients.values():
+            wait_still(client.service_is_ready, what=f'the service {client.srv_name}')
+        h._start_clients = clients
+
+    def call(name: str, request=None):
+        answer = wait_answer(clients[name].call_async(request or Trigger.Request()), f'the answer of {name}')
+        text = getattr(answer, 'message', '') or getattr(answer, 'answer', '')
+        assert answer.success, f'{name} failed: {text}'
+        return answer
+
+    for name in START_SEQUENCE:
+        call(name)
+    wait_for(lambda: h.sim.robot.robot_mode == RUNNING, timeout, 'the robot mode RUNNING')
+    assert call('get_robot_mode', GetRobotMode.Request()).robot_mode.mode == RobotMode.RUNNING
+    call('stop')
+    call('resend_robot_program')
+    wait_for(lambda: h.sim.robot.program_running and h.sim._refusal is None, timeout,
+             'the External Control program running and the controllers back')
