@@ -15,7 +15,7 @@ from ur_sim_driver.motion import result_codes as rc
 SCALED, JTC = 'scaled_joint_trajectory_controller', 'joint_trajectory_controller'
 FPC, FVC = 'forward_position_controller', 'forward_velocity_controller'
 PASS, FREE, TOOL = 'passthrough_trajectory_controller', 'freedrive_mode_controller', 'tool_contact_controller'
-# The driver's test list (force_mode_controller is not loaded in ur_sim: BEST_EFFORT passes over it).
+# The driver's test list of controllers.
 FRICTION = 'friction_model_controller'
 ALL_CONTROLLERS = [SCALED, JTC, FPC, FVC, PASS, 'force_mode_controller', FREE, FRICTION]
 EFFORT = 'forward_effort_controller'

@@ -28,7 +28,7 @@ def rig():
         client = ActionClient(h.client, FollowJointTrajectory, f'/{NAME}/follow_joint_trajectory',
                               callback_group=ReentrantCallbackGroup())
         ready_action(client)
-        # The driver's tests launch with start_joint_controller false: no joint controller is active.
+        # The passthrough scenarios start from no active joint controller: each test activates its own.
         assert cm.switch(deactivate=['scaled_joint_trajectory_controller']).ok
         h.keeper.remember()
         yield h, cm, client
