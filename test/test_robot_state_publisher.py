@@ -49,6 +49,7 @@ class TfRecorder:
         self.joint_names: list[str] = []
         self.urdf: str | None = None
         self.wrench_frames: set[str] = set()
+        self.tcp_frame = f'{h.sim.cfg.tf_prefix}tool0_controller'
         p = h.sim.cfg.prefixed
         h.listen(TFMessage, '/tf_static', self._on_static, latched=True)
         h.listen(TFMessage, '/tf', self._on_tf)
@@ -79,6 +80,13 @@ class TfRecorder:
     def _on_description(self, msg) -> None:
         self.urdf = msg.data
 
+    def complete(self) -> list[int]:
+        """Stamps of the arm joints' /tf messages whose joint state and tool0_controller (published apart, by
+        tcp_pose_broadcaster) have arrived too, oldest first: the publishers' messages of one cycle arrive in any
+        order."""
+        with self.lock:
+            return [s for s in self.joint_stamps if s in self.q and self.tcp_frame in self.tf.get(s, {})]
+
     def lookup(self, target: str, source: str, stamp: int) -> np.ndarray:
         """Pose (4, 4) of frame `source` in frame `target` at `stamp` (a tf2 lookup, done by hand)."""
         with self.lock:
@@ -99,8 +107,7 @@ def check_frames_against_fk(rec: TfRecorder, prefix: str, count: int) -> float:
     data = model.createData()
     tool0 = model.getFrameId(f'{prefix}tool0')
     order = [model.getJointId(n) for n in rec.joint_names]  # published order -> Pinocchio's q index
-    with rec.lock:
-        stamps = [s for s in rec.joint_stamps if s in rec.q][-count:]
+    stamps = rec.complete()[-count:]
     assert len(stamps) == count
     tcp_diff = 0.0
     moved = set()
@@ -125,11 +132,9 @@ def move_and_record(h, rec: TfRecorder, target, duration: float, count: int) -> 
     # Counted by stamp, not by arrival: the listeners' threads may still be delivering older /tf messages.
     accepted_ns = round(h.sim.sim.time * 1e9)
 
-    def after() -> int:
-        with rec.lock:
-            return sum(s > accepted_ns and s in rec.q for s in rec.joint_stamps)
-    wait_for(lambda: after() >= count,
-             what=f'{count} /tf messages of the arm joints, and their joint states, after the goal was accepted')
+    wait_for(lambda: sum(s > accepted_ns for s in rec.complete()) >= count,
+             what=f'{count} /tf messages of the arm joints, with their joint states and tool0_controller, after the '
+                  'goal was accepted')
 
 
 def test_tf_equals_forward_kinematics_of_the_joint_states():

@@ -107,17 +107,33 @@ def test_the_controller_process_gives_a_long_goals_and_messages_memory_back(h):
     assert kept < 20.0, f'the controller process kept {kept:.1f} MB'
 
 
-def test_a_start_far_ahead_is_accepted_with_a_warning_naming_the_cause(h):
+def test_a_start_far_ahead_is_accepted_and_said(h):
     logs = []
-    h.listen(Log, '/rosout', lambda m: logs.append(m.msg), latched=True)
+    h.listen(Log, '/rosout', lambda m: logs.append(m.msg), latched=True)  # the gateway's lines, from its start
     goal = h.goal([point(h.q, 1.0, np.zeros(6))])
     stamp = h.sim.sim.time + 100.0
     goal.trajectory.header.stamp.sec = int(stamp)
     handle = h.send(goal)
     assert handle.accepted
-    wait_for(lambda: any('use_sim_time' in m for m in logs), what='the warning on /rosout')
-    warning = next(m for m in logs if 'use_sim_time' in m)
-    assert f'{int(stamp)}.000 s' in warning and 'simulated time now' in warning
+    wait_for(lambda: any(f'{int(stamp)}.000 s' in text for text in logs), what='the line on /rosout')
+    line = next(text for text in logs if f'{int(stamp)}.000 s' in text)
+    # a start on the simulated clock, only far ahead: no clock is blamed
+    assert 'simulated time now' in line and 'waits until then' in line and 'use_sim_time' not in line
+    wait_for(handle.cancel_goal_async().done, what='the cancel')
+    assert h.result(handle)[0] == GoalStatus.STATUS_CANCELED
+
+
+def test_a_wall_clock_start_is_accepted_with_a_warning_naming_use_sim_time(h):
+    logs = []
+    h.listen(Log, '/rosout', lambda m: logs.append(m.msg), latched=True)  # the gateway's lines, from its start
+    goal = h.goal([point(h.q, 1.0, np.zeros(6))])
+    wall = int(time.time())  # a client on the wall clock while ur_sim runs on simulated time
+    goal.trajectory.header.stamp.sec = wall
+    handle = h.send(goal)
+    assert handle.accepted
+    wait_for(lambda: any(f'{wall}.000 s' in text for text in logs), what='the warning on /rosout')
+    line = next(text for text in logs if f'{wall}.000 s' in text)
+    assert 'use_sim_time:=true' in line
     wait_for(handle.cancel_goal_async().done, what='the cancel')
     assert h.result(handle)[0] == GoalStatus.STATUS_CANCELED
 

@@ -21,6 +21,7 @@ import signal
 import sys
 import threading
 import time
+import traceback
 from multiprocessing.connection import Connection
 
 import rclpy
@@ -154,11 +155,21 @@ class TrajectoryGateway:
             allow_nonzero_end_velocity=cfg.allow_nonzero_end_velocity or self.passthrough)
         if reason is None:
             note = far_start(cmd.header_stamp, now, time.time())
-            if note is not None:
-                (self.log.warning if note.wall_clock else self.log.info)(f'{what} {note.text}')
+            # Two call sites: rclpy's logger raises ValueError when one call site changes its severity.
+            if note is not None and note.wall_clock:
+                self.log.warning(f'{what} {note.text}')
+            elif note is not None:
+                self.log.info(f'{what} {note.text}')
         return reason
 
     def _on_goal(self, goal: FollowJointTrajectory.Goal) -> GoalResponse:
+        try:
+            return self._answer_goal(goal)
+        except Exception:  # noqa: BLE001 - rclpy drops an exception here silently: the client would wait forever
+            self.log.error(f'Rejected FollowJointTrajectory goal: ur_sim failed to check it:\n{traceback.format_exc()}')
+            return GoalResponse.REJECT
+
+    def _answer_goal(self, goal: FollowJointTrajectory.Goal) -> GoalResponse:
         cmd = self._action.arrays_of(goal)
         if cmd is None:  # converted by rclpy: the points are in the message
             traj = goal.trajectory
