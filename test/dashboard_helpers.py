@@ -5,7 +5,8 @@ from sim_harness import wait_answer, wait_still
 
 
 class DashboardServices:
-    """Clients on `h`'s node for `types` ({service name: type}) under /dashboard_client; close() destroys them."""
+    """Clients on `h`'s node for `types` ({service name: type}) under /dashboard_client, left for the harness's
+    teardown: destroyed under its spinning executor, rclpy can kill that thread (InvalidHandle)."""
 
     def __init__(self, h, types: dict[str, type]) -> None:
         self.h, self.types = h, types
@@ -17,7 +18,3 @@ class DashboardServices:
         """The answer of service `name` to a request with `fields`."""
         request = self.types[name].Request(**fields)
         return wait_answer(self.clients[name].call_async(request), f'the answer of /dashboard_client/{name}')
-
-    def close(self) -> None:
-        for client in self.clients.values():
-            self.h.client.destroy_client(client)

@@ -70,15 +70,13 @@ def test_unload_and_load_a_controller(robot):
     assert cm.switch(activate=[FVC], deactivate=[SCALED]).ok
     assert not cm.lifecycle('cleanup', FVC) and not cm.lifecycle('configure', FVC)  # active
     # The reloaded controller commands the robot through its new node.
+    # Left for the harness's teardown: destroyed under its spinning executor, rclpy can kill that thread.
     pub = robot.client.create_publisher(Float64MultiArray, 'forward_velocity_controller/commands', 10)
-    try:
-        wait_still(lambda: pub.get_subscription_count() > 0, what='the reloaded controller subscribed')
-        q0 = robot.q
-        pub.publish(Float64MultiArray(data=[0.1, 0, 0, 0, 0, 0]))
-        wait_for(lambda: robot.q[0] - q0[0] > 0.01, what='the base joint moving under the reloaded controller')
-        pub.publish(Float64MultiArray(data=ZERO))
-    finally:
-        robot.client.destroy_publisher(pub)
+    wait_still(lambda: pub.get_subscription_count() > 0, what='the reloaded controller subscribed')
+    q0 = robot.q
+    pub.publish(Float64MultiArray(data=[0.1, 0, 0, 0, 0, 0]))
+    wait_for(lambda: robot.q[0] - q0[0] > 0.01, what='the base joint moving under the reloaded controller')
+    pub.publish(Float64MultiArray(data=ZERO))
     assert cm.switch(activate=[SCALED], deactivate=[FVC]).ok
     assert cm.lifecycle('cleanup', FVC) and cm.states()[FVC] == 'unconfigured'
     assert cm.lifecycle('configure', FVC) and cm.states()[FVC] == 'inactive'
@@ -88,15 +86,13 @@ def test_load_needs_a_type_ur_sim_has(robot):
     cm = robot.cm
     assert not cm.lifecycle('load', 'my_controller')  # no <name>.type parameter
     assert not cm.lifecycle('configure', 'my_controller') and not cm.lifecycle('cleanup', 'my_controller')
+    # Left for the harness's teardown: destroyed under its spinning executor, rclpy can kill that thread.
     client = robot.client.create_client(SetParameters, 'controller_manager/set_parameters')
-    try:
-        wait_still(client.service_is_ready, what='the controller manager parameter service')
-        param = Parameter('my_controller.type', value='velocity_controllers/JointGroupVelocityController')
-        answer = wait_answer(client.call_async(SetParameters.Request(parameters=[param.to_parameter_msg()])))
-        assert answer.results[0].successful
-        assert not cm.lifecycle('load', 'my_controller')  # a type ur_sim has, but not under that name
-    finally:
-        robot.client.destroy_client(client)
+    wait_still(client.service_is_ready, what='the controller manager parameter service')
+    param = Parameter('my_controller.type', value='velocity_controllers/JointGroupVelocityController')
+    answer = wait_answer(client.call_async(SetParameters.Request(parameters=[param.to_parameter_msg()])))
+    assert answer.results[0].successful
+    assert not cm.lifecycle('load', 'my_controller')  # a type ur_sim has, but not under that name
     assert 'my_controller' not in cm.states()
 
 

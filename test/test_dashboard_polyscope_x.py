@@ -96,10 +96,7 @@ def robot(request):
     ur_type, version = request.param
     with running_sim(ur_type=ur_type, software_version=version) as h:
         services = DashboardServices(h, SERVICES)
-        try:
-            yield h, services
-        finally:
-            services.close()
+        yield h, services
 
 
 def test_no_dashboard_server_on_its_port(robot):

@@ -96,10 +96,7 @@ SERVICES = {'set_operational_mode': SetOperationalMode, 'get_operational_mode': 
 def robot(request):
     with running_sim(ur_type=request.param) as h:
         services = DashboardServices(h, SERVICES)
-        try:
-            yield h, services
-        finally:
-            services.close()
+        yield h, services
 
 
 def test_manual_mode_refuses_the_driver_services_that_act_on_the_robot(robot):

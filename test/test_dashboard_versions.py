@@ -47,10 +47,7 @@ def robot(request):
     ur_type, version = request.param
     with running_sim(ur_type=ur_type, software_version=version) as h:
         services = DashboardServices(h, SERVICES)
-        try:
-            yield h, services, h.sim.cfg.software_version
-        finally:
-            services.close()
+        yield h, services, h.sim.cfg.software_version
 
 
 def test_the_version_and_model_are_the_robots(robot):
