@@ -245,8 +245,12 @@ def test_effort_needs_torque_control():
     eff = hw.joint_interfaces(JOINTS, 'effort')
     assert hw.prepare_command_mode_switch(eff, (), (), PREFIX, SoftwareVersion(5, 12, 6)) == hw.EFFORT_TOO_OLD
     assert hw.prepare_command_mode_switch(eff, (), (), PREFIX, SoftwareVersion(3, 15, 8)) == hw.EFFORT_TOO_OLD
-    # New enough: ur_sim has no torque control to run it.
-    assert hw.prepare_command_mode_switch(eff, (), (), PREFIX, SoftwareVersion(5, 23, 0)) == hw.EFFORT_NOT_SIMULATED
+    # New enough: alone, or in the switch that stops the position controller; not beside it.
+    assert hw.prepare_command_mode_switch(eff, (), (), PREFIX, SoftwareVersion(5, 23, 0)) is None
+    assert hw.prepare_command_mode_switch(eff, (), (), PREFIX, SoftwareVersion(10, 10, 0)) is None
+    assert hw.prepare_command_mode_switch(eff, POS, POS, PREFIX, SoftwareVersion(5, 23, 0)) is None
+    assert hw.prepare_command_mode_switch(eff, (), POS, PREFIX, SoftwareVersion(5, 23, 0)) == \
+        'Starting effort together with position is not allowed.'
     # Incompatible modes are named first, as upstream checks them first.
     assert hw.prepare_command_mode_switch(eff + POS, (), (), PREFIX, SoftwareVersion(5, 12, 6)) == \
         'Starting position together with effort is not allowed.'

@@ -90,7 +90,7 @@ def test_published_numbers(ur_type):
 def test_shapes_read_only_and_physical(ur_type):
     p = load_ur_params(ur_type)
     shapes = dict(masses=(6,), coms=(6, 3), inertias=(6, 6), inertia_rpy=(6, 3), q_min=(6,), q_max=(6,),
-                  v_max=(6,), effort_max=(6,), armature=(6,), damping=(6,))
+                  v_max=(6,), effort_max=(6,), armature=(6,), damping=(6,), coulomb=(6,))
     for name, shape in shapes.items():
         arr = getattr(p, name)
         assert arr.shape == shape, name

@@ -11,15 +11,18 @@ so the velocity, acceleration and position limits hold as for any reference:
 * velocity: the commanded velocities, reached at the robot's acceleration limit (the reference integrates a
   velocity ramped at that limit, so the servo can follow it exactly), capped at the velocity limits.
 
-forward_effort_controller is loaded, as the driver loads it, but cannot be activated: the hardware refuses effort
-mode on robot software older than 5.23.0 with the driver's words, and on newer software because ur_sim does not
-simulate torque control yet.
+* effort: the commanded joint torques, on top of the robot's gravity compensation and within its effort limits
+  (``Simulator.advance_torque``, ``robot/direct_torque.py``); the hardware starts effort mode only on robot
+  software 5.23.0 / 10.10.0 or later, and only without another joint mode. Until the first message the torques
+  are zero (the arm, gravity-compensated, stays where it is); the robot's safety system stops it when a joint
+  exceeds its speed limit or could no longer stop before a position limit.
 
 A message with the wrong number of values or a non-finite value is refused with a log line naming it (upstream
 logs the size in its update and keeps the previous command; refusing it on arrival keeps the same command).
 While the controller is inactive its messages are dropped, and activation starts from no command: the robot
-holds the position (position) or stands still (velocity) until the first message, as upstream resets its
-command buffer on activation.
+holds the position (position), stands still (velocity) or gets zero torques (effort) until the first message, as
+upstream resets its command buffer on activation. Deactivated, the effort controller's torques are gone (the
+hardware zeroes them) and the robot holds the position where it was deactivated.
 """
 from __future__ import annotations
 
@@ -57,8 +60,7 @@ def check_command(values: list[float] | np.ndarray, joints: tuple[str, ...]) -> 
 
 
 class ForwardCommandController(JointCommandController):
-    """One forward command controller: `kind` is 'position', 'velocity' or 'effort' (loaded as the driver loads it;
-    the hardware refuses to start effort mode, see ``ur_hardware.prepare_command_mode_switch``)."""
+    """One forward command controller: `kind` is 'position', 'velocity' or 'effort'."""
 
     def __init__(self, kind: str) -> None:
         super().__init__()
@@ -109,11 +111,19 @@ class ForwardCommandController(JointCommandController):
         self._r = np.array(q, dtype=float)
         self._rd = np.zeros_like(self._r)
 
+    def torques(self) -> np.ndarray | None:
+        if self.kind != EFFORT:
+            return None
+        return np.zeros(len(self._r)) if self._target is None else self._target
+
     def command(self, state: ArmState, period: float) -> tuple[TrajectorySample, np.ndarray | None]:
-        if self.kind == EFFORT:  # the hardware never starts effort mode, so no effort controller becomes active
-            raise AssertionError('forward_effort_controller is active, but ur_sim does not simulate torque control')
         zero = np.zeros_like(state.q)
         host = self.host
+        if self.kind == EFFORT:
+            # The robot applies the torques (torques()); the reference, the arm where it is at rest, only feeds the
+            # controllers' state and the safety check (which watches the measured motion under torque control).
+            host.speed_scaling.update_at_rest(period)
+            return TrajectorySample(state.q.copy(), zero, zero.copy(), 0, True), None
         if self.kind == POSITION:
             target = self._r if self._target is None else self._target
             # At rest at the target, which is also where the servo must stop.

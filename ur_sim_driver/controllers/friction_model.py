@@ -11,9 +11,10 @@ one per joint. Facts from the driver (``friction_model_controller.cpp``) and its
   no effect and the answer is false; the External Control program must run (the scales go through its script
   command socket), else the answer is false too;
 * the scales are clamped to [0, 1] and sent to the robot, where they scale the friction compensation of
-  ``direct_torque``. The robot keeps them (:attr:`FrictionModelController.scales`, restored when the controller is
-  activated again, as upstream does); they act only under torque control, which ur_sim does not simulate yet, so
-  in position, velocity and passthrough control they change nothing, as on the robot.
+  ``direct_torque`` (``Simulator.friction_scales``, ``robot/direct_torque.py``: the joints feel the friction the
+  compensation leaves). The controller keeps the last ones (:attr:`FrictionModelController.scales`) and sends
+  them again when it is activated again, as upstream does. They act only under torque control (the
+  forward_effort_controller): in position, velocity and passthrough control they change nothing, as on the robot.
 
 Its command interfaces (``<tf_prefix>friction_model/*``) start no robot mode: it runs beside every other controller.
 """
@@ -25,6 +26,7 @@ from ur_msgs.srv import SetFrictionModelParameters
 
 from ur_sim_driver.controllers.base import Component, Host
 from ur_sim_driver.controllers.ur_hardware import friction_interfaces
+from ur_sim_driver.robot.direct_torque import FrictionScales
 from ur_sim_driver.robot.sim_config import SimConfig
 from ur_sim_driver.robot.software import FRICTION_SCALES, supports
 
@@ -51,6 +53,8 @@ class FrictionModelController(Component):
         if self.scales is not None and self.node is not None:
             self.node.get_logger().info('Restoring friction model parameters from before deactivation. If this is '
                                         'not desired, please set new parameters using the service.')
+            if self.host.robot.program_running:  # under the lock: activation runs in the simulation loop
+                self.host.sim.friction_scales = FrictionScales.make(*self.scales)
 
     def _on_set(self, request: SetFrictionModelParameters.Request,
                 response: SetFrictionModelParameters.Response) -> SetFrictionModelParameters.Response:
@@ -75,6 +79,7 @@ class FrictionModelController(Component):
         else:
             with self.host.lock:
                 self.scales = (np.clip(viscous, 0.0, 1.0), np.clip(coulomb, 0.0, 1.0))
+                self.host.sim.friction_scales = FrictionScales.make(*self.scales)
             response.success = True
             logger.info('Friction model parameters have been set successfully.')
         return response

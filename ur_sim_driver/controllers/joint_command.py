@@ -32,6 +32,12 @@ class JointCommander:
         """
         raise NotImplementedError
 
+    def torques(self) -> np.ndarray | None:
+        """Under the lock, after :meth:`command`: the joint torques (n,) [N m] the robot applies on top of its gravity
+        compensation when this commander controls torque (the driver's effort interface), else None (the robot's
+        servo follows the reference)."""
+        return None
+
     def halt(self, q: np.ndarray, reason: str) -> None:
         """The robot cancelled the motion (a tool contact): stop commanding motion, hold `q` (n,) [rad] and end
         any goal, naming `reason`. Called under the lock between two cycles."""
@@ -59,7 +65,9 @@ class JointCommandController(Component, JointCommander):
 
 
 class HoldPosition(JointCommander):
-    """The robot without an active joint controller: it holds the measured position where the last one left."""
+    """The robot without an active joint controller: it holds the measured position where the last one left, as
+    the UR hardware keeps its last position command; after torque control, where the arm comes to rest (:meth:`stop`).
+    """
 
     def __init__(self) -> None:
         self._sample: TrajectorySample | None = None
@@ -67,6 +75,14 @@ class HoldPosition(JointCommander):
     def take_over(self, state: ArmState) -> None:
         zero = np.zeros_like(state.q)
         self._sample = TrajectorySample(state.q.copy(), zero, zero.copy(), 0, True)
+
+    def stop(self, state: ArmState, deceleration, q_min: np.ndarray, q_max: np.ndarray) -> None:
+        """Take over from torque control, which no position command bounds: the arm holds where it comes to rest
+        braking at `deceleration` [rad/s^2] (a number or (n,)), within `q_min`, `q_max` (n,) [rad], instead of
+        turning back to where torque control ended."""
+        self.take_over(state)
+        q = np.clip(state.q + state.qd * np.abs(state.qd) / (2.0 * deceleration), q_min, q_max)
+        self._sample = TrajectorySample(q, self._sample.velocities, self._sample.accelerations, 0, True)
 
     def command(self, state: ArmState, period: float) -> tuple[TrajectorySample, np.ndarray | None]:
         if self._sample is None:

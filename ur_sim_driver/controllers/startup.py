@@ -11,7 +11,7 @@ from __future__ import annotations
 from collections.abc import Iterable
 
 from ur_sim_driver.controllers.base import Component
-from ur_sim_driver.controllers.ur_hardware import EFFORT_NOT_SIMULATED, EFFORT_TOO_OLD, robot_model_refusal
+from ur_sim_driver.controllers.ur_hardware import EFFORT_TOO_OLD, robot_model_refusal
 from ur_sim_driver.errors import ConfigError
 from ur_sim_driver.robot.sim_config import SimConfig
 from ur_sim_driver.robot.software import TORQUE_CONTROL, supports
@@ -43,10 +43,10 @@ def initial_joint_controller(cfg: SimConfig) -> str | None:
     if name not in choices:
         raise ConfigError(f"parameter 'initial_joint_controller' = {cfg.initial_joint_controller!r} is not a joint "
                           f"controller of ur_sim; valid choices: {', '.join(choices)}")
-    if name == EFFORT:  # the driver's spawner would fail on the hardware's refusal; ur_sim says so at start
-        why = EFFORT_NOT_SIMULATED if supports(cfg.software_version, TORQUE_CONTROL) else EFFORT_TOO_OLD
-        raise ConfigError(f"parameter 'initial_joint_controller' = {name!r} cannot be activated: {why}; valid "
-                          f"choices: {', '.join(c for c in choices if c != EFFORT)}")
+    if name == EFFORT and not supports(cfg.software_version, TORQUE_CONTROL):
+        # The driver's spawner would fail on the hardware's refusal; ur_sim says so at start.
+        raise ConfigError(f"parameter 'initial_joint_controller' = {name!r} cannot be activated: {EFFORT_TOO_OLD}; "
+                          f"valid choices: {', '.join(c for c in choices if c != EFFORT)}")
     return name
 
 

@@ -1,14 +1,15 @@
 """The UR hardware interface as ros2_control's controller manager sees it, without ROS.
 
-The UR driver's hardware component exports, per joint, the command interfaces ``<joint>/position`` and
-``<joint>/velocity`` and the state interfaces ``position``, ``velocity``, ``effort``; besides them GPIO-like
-interfaces named after a function (``<tf_prefix>trajectory_passthrough/...``, ``<tf_prefix>freedrive_mode/...``,
-``<tf_prefix>tool_contact/...``, ``<tf_prefix>speed_scaling/speed_scaling_factor``, ...). Each command interface
-a controller claims starts a *mode* of the robot, and the hardware refuses a switch that would run two modes
-that cannot run together (``prepare_command_mode_switch``): position, velocity and passthrough exclude one another
-and freedrive; tool contact runs beside position, velocity and passthrough; force mode beside passthrough.
-Facts from ``ur_robot_driver`` (hardware_interface.cpp and its mode compatibility table); the code is ours.
-"""
+The UR driver's hardware component exports, per joint, the command interfaces ``<joint>/position``,
+``<joint>/velocity`` and ``<joint>/effort`` and the state interfaces ``position``, ``velocity``, ``effort``; besides
+them GPIO-like interfaces named after a function (``<tf_prefix>trajectory_passthrough/...``,
+``<tf_prefix>freedrive_mode/...``, ``<tf_prefix>tool_contact/...``,
+``<tf_prefix>speed_scaling/speed_scaling_factor``, ...). Each command interface a controller claims starts a *mode*
+of the robot, and the hardware refuses a switch that would run two modes that cannot run together
+(``prepare_command_mode_switch``): position, velocity and passthrough exclude one another and freedrive; effort
+(torque control, robot software 5.23.0 / 10.10.0 or later) excludes all of them; tool contact runs beside position,
+velocity, effort and passthrough; force mode beside passthrough. Facts from ``ur_robot_driver``
+(hardware_interface.cpp and its mode compatibility table); the code is ours."""
 from __future__ import annotations
 
 from collections.abc import Iterable
@@ -47,8 +48,6 @@ def mode_of(interface: str, tf_prefix: str) -> str | None:
 
 EFFORT_TOO_OLD = ('Requested to use effort interface on a robot version that doesn\'t support it. Torque control is '
                   'available from robot software 5.23.0 / 10.10.0 on.')
-EFFORT_NOT_SIMULATED = ('Requested to use effort interface: ur_sim does not simulate torque control (direct_torque) '
-                        'yet; use position, velocity or passthrough control')
 
 
 def prepare_command_mode_switch(start: Iterable[str], stop: Iterable[str], running: Iterable[str],
@@ -72,10 +71,8 @@ def prepare_command_mode_switch(start: Iterable[str], stop: Iterable[str], runni
             if not compatible(mode, other):
                 return f'Starting {mode} together with {other} is not allowed.'
         started.append(mode)
-    if EFFORT in started:
-        if version is not None and not supports(version, TORQUE_CONTROL):
-            return EFFORT_TOO_OLD
-        return EFFORT_NOT_SIMULATED
+    if EFFORT in started and version is not None and not supports(version, TORQUE_CONTROL):
+        return EFFORT_TOO_OLD
     for mode in started:
         for other in sorted(remaining):
             if not compatible(mode, other):

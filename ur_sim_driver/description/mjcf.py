@@ -21,6 +21,11 @@ Joint dynamics not in UR's published data (values per type in ``config/ur_types/
 
 The integrator is ``implicitfast``, which treats the damping implicitly (stable at 2 ms).
 
+Coulomb joint friction (``URParams.coulomb``) is not in the model: the robot's servo cancels it. Under torque
+control the simulator sets what the robot's compensation leaves as MuJoCo's ``frictionloss``, a soft constraint;
+its solver parameters here make it stiff (:data:`FRICTION_SOLREF`, :data:`FRICTION_SOLIMP`), so that a joint held
+by friction creeps by less than 1e-4 rad/s instead of MuJoCo's default 0.02 rad/s.
+
 Collision shapes are capsules and cylinders roughly the size of the real links (radii in the
 YAML). Contacts between a body and its parent are filtered by MuJoCo; pairs that touch by
 construction in the compact wrist and at the base are excluded explicitly. Other self-contacts
@@ -39,6 +44,10 @@ from ur_sim_driver.description.params import Origin, URParams, matrix_to_quat
 from ur_sim_driver.description.tool import ToolDef
 from ur_sim_driver.description.urdf import WORLD_LINK, fmt, kinematic_tree, link_inertials
 from ur_sim_driver.errors import ConfigError
+
+# Coulomb friction's constraint: time constant [s] (MuJoCo raises it to two physics steps) and impedance.
+FRICTION_SOLREF = '0.004 1'
+FRICTION_SOLIMP = '0.999 0.999 0.001'
 
 # (contype, conaffinity). Environment geoms set both bits, so every robot geom meets them.
 # Robot geoms use bit 0 on both sides to also meet each other, or contype bit 1 with
@@ -118,7 +127,8 @@ def build_mjcf(params: URParams, tf_prefix: str = '', tool: ToolDef | None = Non
             i = j.index
             ET.SubElement(bodies[j.child], 'joint', name=j.name, type='hinge', axis='0 0 1',
                           range=fmt([params.q_min[i], params.q_max[i]]), armature=fmt(params.armature[i]),
-                          damping=fmt(params.damping[i]))
+                          damping=fmt(params.damping[i]), solreffriction=FRICTION_SOLREF,
+                          solimpfriction=FRICTION_SOLIMP)
 
     for link, inn in link_inertials(params, p, tool).items():
         t = inn.tensor_in_link()

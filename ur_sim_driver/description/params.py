@@ -140,6 +140,8 @@ class URParams:
         control_rate: controller rate [Hz] (125 CB3, 500 e-Series).
         armature: reflected rotor inertia (6,) [kg m^2] (simulation estimate).
         damping: viscous joint friction (6,) [N m s/rad] (simulation estimate).
+        coulomb: Coulomb joint friction (6,) [N m] (simulation estimate; felt only under torque control, where
+            the robot's friction compensation leaves part of it, see ``Simulator.advance_torque``).
         shoulder_offset, elbow_offset: lateral offsets of the arm tubes [m] (collision shapes).
         collision_radius: read-only map part -> radius [m] for base, shoulder, upper_arm,
             elbow, forearm, wrist.
@@ -168,6 +170,7 @@ class URParams:
     control_rate: float
     armature: np.ndarray
     damping: np.ndarray
+    coulomb: np.ndarray
     shoulder_offset: float
     elbow_offset: float
     collision_radius: Mapping[str, float] = field(default_factory=dict)
@@ -263,6 +266,7 @@ def _load(key: str) -> URParams:
             control_rate=float(_get(raw, 'control_rate', w)),
             armature=_frozen(_get(sim, 'armature', w), (6,), f'{w}: simulation.armature'),
             damping=_frozen(_get(sim, 'damping', w), (6,), f'{w}: simulation.damping'),
+            coulomb=_frozen(_get(sim, 'coulomb', w), (6,), f'{w}: simulation.coulomb'),
             shoulder_offset=float(_get(off, 'shoulder', w)),
             elbow_offset=float(_get(off, 'elbow', w)),
             collision_radius=MappingProxyType(

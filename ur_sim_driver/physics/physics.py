@@ -179,6 +179,26 @@ class ArmPhysics:
         mujoco.mj_jacSubtreeCom(m, d, self._jac, self._arm_root)
         return -float(m.body_subtreemass[self._arm_root]) * (self._jac[:, self._i_dof].T @ g_world)
 
+    def point_gravity_torques(self, mass: float, point: np.ndarray, g_base: np.ndarray) -> np.ndarray:
+        """(n,) joint torques [N m] that hold a point mass `mass` [kg] carried by the flange at `point` (3,) [m] in
+        tool0 still under a gravitational acceleration `g_base` (3,) [m/s^2] in the base frame (the arm's own
+        weight is not in it)."""
+        m, d = self.model, self.data
+        site = self._tcp_site
+        where = d.site_xpos[site] + d.site_xmat[site].reshape(3, 3) @ np.asarray(point, dtype=float)
+        g_world = d.xmat[self._base].reshape(3, 3) @ np.asarray(g_base, dtype=float)
+        mujoco.mj_jac(m, d, self._jac, None, where, int(m.site_bodyid[site]))
+        return -mass * (self._jac[:, self._i_dof].T @ g_world)
+
+    def set_joint_friction(self, damping: np.ndarray, coulomb: np.ndarray) -> None:
+        """The joints' viscous friction `damping` (n,) [N m s/rad] and Coulomb friction `coulomb` (n,) [N m], from
+        the next step on. MuJoCo treats both implicitly (damping in the integrator, Coulomb friction as a
+        constraint), so a joint with little inertia stays stable at the control period."""
+        self.model.dof_damping[self._dof] = damping
+        self.model.dof_frictionloss[self._dof] = coulomb
+        # The invariant of step(): the passive forces of the current state follow the new damping.
+        mujoco.mj_step1(self.model, self.data)
+
     def dynamics(self) -> tuple[np.ndarray, np.ndarray]:
         """M(q) (n, n) [kg m^2] and h(q, qd) = gravity + Coriolis - passive (n,) [N m] at the current state."""
         mujoco.mj_fullM(self.model, self.data, self._mass)

@@ -26,6 +26,7 @@ from ur_sim_driver.physics.physics import ArmPhysics, ArmState
 from ur_sim_driver.physics.servo import JointServo, Setpoint
 from ur_sim_driver.physics.tool_contact import FLANGE_LINK, contact_threshold, tool_bodies
 from ur_sim_driver.physics.torque_control import PdGains
+from ur_sim_driver.robot.direct_torque import DEFAULT_SCALES, FrictionScales, felt_friction
 from ur_sim_driver.robot.io_bank import IoBank
 from ur_sim_driver.robot.payload import NO_PAYLOAD, Payload, make_payload
 from ur_sim_driver.robot.sim_config import SimConfig
@@ -117,6 +118,10 @@ class Simulator:
         # The gravity the robot's controller believes in (set_gravity: anti-gravity in the base frame [m/s^2]);
         # None: the one the arm is under, as a correctly installed robot's.
         self.gravity_belief: np.ndarray | None = None
+        # Torque control's friction compensation (friction_model_controller), and the scales whose leftover friction
+        # the joints carry now (None: the servo's modes, no Coulomb friction; see direct_torque.py).
+        self.friction_scales: FrictionScales = DEFAULT_SCALES
+        self._felt_scales: FrictionScales | None = None
 
     @property
     def time(self) -> float:
@@ -133,6 +138,7 @@ class Simulator:
         The robot's servo turns the reference into a setpoint within the joint limits (``servo.py``), never
         passing `stop` (n,) [rad]; the computed-torque controller tracks the setpoint.
         """
+        self._servo_friction()
         mass, bias = self._dynamics()
         # The joints' reachable accelerations, the servo and the computed torques: one compiled call.
         tau = self.control.torques(mass, bias, state.q, state.qd, ref.positions, ref.velocities,
@@ -152,6 +158,7 @@ class Simulator:
         limit and positions beyond a limit are pushed back), within the effort limits. Returns the torques (n,)
         [N m]. The servo restarts from the measured state, so that position control resumes without a jump."""
         p = self.params
+        self._servo_friction()
         mass, bias = self._dynamics()
         inertia = np.diag(mass)
         q, qd = state.q, state.qd
@@ -165,6 +172,48 @@ class Simulator:
         after = self.physics.state()
         self.servo.reset(after.q, after.qd)
         self._servo_active = False
+        return tau
+
+    def advance_torque(self, state: ArmState, torques: np.ndarray) -> np.ndarray:
+        """Torque control (direct_torque) for one control period: `torques` (n,) [N m] on top of the robot's gravity
+        compensation (:meth:`gravity_compensation`), within the effort limits and without driving a joint past its
+        speed limit (as under position control); the joints feel the friction the
+        robot's compensation leaves (``direct_torque.felt_friction``). Returns the motor torques (n,) [N m]. The
+        servo restarts from the measured state, so that position control resumes without a jump."""
+        p = self.params
+        if self._felt_scales is not self.friction_scales:
+            self._felt_scales = self.friction_scales
+            self.physics.set_joint_friction(*felt_friction(p.damping, p.coulomb, self.friction_scales))
+        tau = np.asarray(torques, dtype=float) + self.gravity_compensation()
+        # No drive turns its joint past the speed limit within the period, as under position control (there the
+        # servo's accelerations are bounded so): per joint, from its own inertia and the model's bias torques.
+        mass, bias = self.physics.dynamics()
+        inertia = np.diag(mass) / self.control_dt
+        hi = np.clip(bias + inertia * (p.v_max - state.qd), -p.effort_max, p.effort_max)
+        lo = np.clip(bias - inertia * (p.v_max + state.qd), -p.effort_max, p.effort_max)
+        tau = np.clip(tau, lo, hi)
+        self.physics.step(tau)
+        after = self.physics.state()
+        self.servo.reset(after.q, after.qd)
+        self._servo_active = False
+        return tau
+
+    def _servo_friction(self) -> None:
+        """The servo's modes after torque control: the joints' viscous friction, no Coulomb friction (the servo
+        cancels it)."""
+        if self._felt_scales is not None:
+            self._felt_scales = None
+            self.physics.set_joint_friction(self.params.damping, np.zeros_like(self.params.coulomb))
+
+    def gravity_compensation(self) -> np.ndarray:
+        """(n,) the torques [N m] with which the robot's controller holds the arm up at rest: its model of arm and
+        tool with the payload it believes mounted (set_payload), under the gravity it believes in (set_gravity)."""
+        g = -self.gravity_belief if self.gravity_belief is not None else self.physics.gravity_in_base()
+        tau = self.physics.gravity_torques(g)  # arm, tool and the mounted payload
+        believed, mounted = self.payload, self.mounted
+        if believed.mass != mounted.mass or not np.array_equal(believed.cog, mounted.cog):
+            tau = tau + self.physics.point_gravity_torques(believed.mass, believed.cog, g) \
+                - self.physics.point_gravity_torques(mounted.mass, mounted.cog, g)
         return tau
 
     def _dynamics(self) -> tuple[np.ndarray, np.ndarray]:

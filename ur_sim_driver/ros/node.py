@@ -61,11 +61,12 @@ from ur_sim_driver.ports.primary_port import REALTIME, SECONDARY, PrimaryPort
 from ur_sim_driver.ports.rtde_port import RtdePort
 from ur_sim_driver.ports.tcp_port import PortError
 from ur_sim_driver.robot.dashboard_server import DashboardServer
+from ur_sim_driver.robot.direct_torque import STOPJ_DECELERATION, motion_limit_cause
 from ur_sim_driver.robot.encoders import reported_velocity
 from ur_sim_driver.robot.robot_state import NORMAL, RUNNING, RobotState
 from ur_sim_driver.robot.safety import ContactSafety, limit_cause
 from ur_sim_driver.robot.sim_config import PARAMETER_NAMES, SimConfig, sim_config_from_params, unknown_parameters
-from ur_sim_driver.robot.simulator import Simulator
+from ur_sim_driver.robot.simulator import BRAKE_CAPABILITY, Simulator
 from ur_sim_driver.robot.speed_scaling import RobotSpeedScaling
 from ur_sim_driver.ros.dashboard import DashboardClient
 from ur_sim_driver.ros.robot_state_helper import RobotStateHelper
@@ -368,7 +369,15 @@ class UrSimNode(Node):
                 commander = next((c for c in self._commanders if c.active), self._holder) if hardware.writes \
                     else self._holder
             if commander is not self._commander:
-                commander.take_over(reported)
+                if commander is self._holder and self._commander is not None and self._commander.torques() is not None:
+                    # Torque control ended: switched off, the driver's program ends its torque thread with a stopj;
+                    # stopped by the robot, it brakes as hard as it can. Either way it holds where it comes to rest.
+                    p = self.sim.params
+                    braking = STOPJ_DECELERATION if self.robot.motion_refusal() is None \
+                        else BRAKE_CAPABILITY * self.sim.a_max
+                    self._holder.stop(reported, braking, p.q_min, p.q_max)
+                else:
+                    commander.take_over(reported)
                 self._commander = commander
             sample, stop = commander.command(reported, self.sim.control_dt)
             tcp_position, tcp_orientation = self.sim.tcp_pose()
@@ -380,8 +389,11 @@ class UrSimNode(Node):
             if self._force_mode.spec is not None:
                 sample, stop = self._force_mode.apply(sample, stop, tcp_position, self.sim.physics.tcp_velocity()[:3],
                                                       tcp_orientation, wrench, self.sim.control_dt)
+            torques = commander.torques()
             if getattr(commander, 'free', False):  # freedrive: the robot compensates gravity, the arm is free
                 tau = self.sim.advance_free(state)
+            elif torques is not None:  # torque control: the commanded torques on top of gravity compensation
+                tau = self.sim.advance_torque(state, torques)
             else:
                 tau = self.sim.advance(state, sample, stop)
             contacts = self.sim.physics.contacts()  # measured over this cycle's physics steps
@@ -389,7 +401,7 @@ class UrSimNode(Node):
                 halted = self._tool_contact.detect(contacts, self.sim.time)
                 if halted is not None:  # the robot cancels the motion: the next cycle brakes
                     commander.halt(self.sim.state().q, halted)
-            cause = self._safety_check(sample, contacts)
+            cause = self._safety_check(sample, contacts, torques is not None)
             if cause is not None:
                 # Seen in this cycle's physics step: the arm is halted from the next cycle on.
                 self.robot.protective_stop(self.sim.time, cause)
@@ -415,14 +427,19 @@ class UrSimNode(Node):
             self.get_logger().error(f'PROTECTIVE_STOP: {cause}')
         self._cycle += 1
 
-    def _safety_check(self, sample, contacts) -> str | None:
+    def _safety_check(self, sample, contacts, torque_control: bool) -> str | None:
         """Under the lock, after the physics step: the cause of a protective stop, or None. The checks are armed
-        while the robot can move (RUNNING, NORMAL); see ``safety.py``."""
+        while the robot can move (RUNNING, NORMAL); see ``safety.py``. Under torque control no reference bounds the
+        motion: the measured stopping distances are checked against the position limits (``direct_torque.py``)."""
         armed = self.robot.robot_mode == RUNNING and self.robot.safety_mode == NORMAL
         cause = self.contact_safety.update(contacts, armed)
         if cause is None and armed:
             p = self.sim.params
-            cause = limit_cause(self.sim.physics.positions(), sample.positions, p.q_min, p.q_max, self.joints)
+            if torque_control:
+                after = self.sim.state()
+                cause = motion_limit_cause(after.q, after.qd, p.q_min, p.q_max, self.sim.a_max, self.joints)
+            else:
+                cause = limit_cause(self.sim.physics.positions(), sample.positions, p.q_min, p.q_max, self.joints)
         return cause
 
     def _controller_stopper(self) -> None:

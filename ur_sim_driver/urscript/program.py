@@ -95,6 +95,10 @@ class ScriptProgram:
         self._qd_nominal = qd
         self._ref = TrajectorySample(q, qd * factor, qdd * factor * factor, 0, self._move_t >= self._move.duration)
 
+    def torques(self) -> None:
+        """A program moves the arm through the robot's servo (ur_sim's URScript has no direct_torque)."""
+        return None
+
     def halt(self, q: np.ndarray, reason: str) -> None:
         self._stop(ScriptError(f'the robot halted the program: {reason}'), q)
 
