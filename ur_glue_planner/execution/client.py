@@ -26,7 +26,7 @@ from control_msgs.action import FollowJointTrajectory
 from control_msgs.msg import JointTolerance
 from rcl_interfaces.msg import Log
 from rclpy.context import Context
-from rclpy.executors import SingleThreadedExecutor
+from rclpy.experimental import EventsExecutor
 from rclpy.node import Node
 from rclpy.qos import DurabilityPolicy, QoSProfile
 from sensor_msgs.msg import JointState
@@ -208,7 +208,9 @@ class URClient:
                                                  10)
         self._action = ActionClient(self.node, FollowJointTrajectory, self.action_name)
         self._goals: weakref.WeakSet[TrajectoryGoal] = weakref.WeakSet()
-        self._executor = SingleThreadedExecutor(context=context)
+        # rclpy's EventsExecutor: about a quarter of the CPU of the SingleThreadedExecutor, which rebuilds its wait
+        # set at each wake (python -m bench executors: 76 against 274 ms a second of robot time at 500 Hz).
+        self._executor = EventsExecutor(context=context)
         self._executor.add_node(self.node)
         self._spinner = SpinThread(self._executor, 'ur_client', pace=self._pace).start()
         try:

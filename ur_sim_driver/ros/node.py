@@ -79,6 +79,8 @@ from ur_sim_driver.spin_thread import SpinThread
 from ur_sim_driver.urscript.runner import ScriptRunner
 
 GIL_SWITCH_INTERVAL = 2e-4  # [s]
+# Nodes spun by an executor of their own besides ur_sim's own node (UrSimNode.busy_nodes).
+BUSY_NODES = ('trajectory_until_node',)
 # pace_topic: the client's last word counts, also if it was said before ur_sim subscribed (a client may start first)
 PACE_QOS = QoSProfile(depth=1, durability=DurabilityPolicy.TRANSIENT_LOCAL, reliability=ReliabilityPolicy.RELIABLE)
 VIEWER_FRAME_PERIOD = 1.0 / 30.0  # [s] of wall time
@@ -225,6 +227,11 @@ class UrSimNode(Node):
     def nodes(self) -> list[Node]:
         """This node, the controller manager's and every component's: an executor spinning ur_sim must spin all."""
         return [self, self.controller_manager.node, *(c.node for c in self.components if c.node is not None)]
+
+    def busy_nodes(self) -> list[Node]:
+        """The nodes of :meth:`nodes` woken most often: this one (``pace_topic``) and the trajectory_until_node (its
+        client of the trajectory action gets every goal's feedback and status)."""
+        return [n for n in self.nodes() if n is self or n.get_name() in BUSY_NODES]
 
     @property
     def jtc(self) -> TrajectoryController:
@@ -484,6 +491,20 @@ class UrSimNode(Node):
         self._robot_files.cleanup()
 
 
+def make_executors(node: UrSimNode, split: bool = True) -> list[MultiThreadedExecutor]:
+    """The executors spinning ur_sim's nodes: with `split`, the busy nodes (:meth:`UrSimNode.busy_nodes`) on one of
+    their own. rclpy's executor walks every entity of its nodes at each wake (about 2 ms for ur_sim's 200 services,
+    subscriptions and event handlers), and the busy ones wake it about 40 times a second of a glue run: apart, half
+    the executors' CPU of a run (``python -m bench executors``). Multi-threaded: service callbacks wait for cycles."""
+    executors = [MultiThreadedExecutor(num_threads=4, context=node.context)]
+    busy = node.busy_nodes() if split else []
+    if busy:
+        executors.append(MultiThreadedExecutor(num_threads=4, context=node.context))
+    for n in node.nodes():
+        executors[1 if n in busy else 0].add_node(n)
+    return executors
+
+
 def main(argv: list[str] | None = None) -> int:
     """Entry point of `ur_sim` (and `ros2 run ur_sim_driver ur_sim`). Exits 0 on SIGINT/SIGTERM, 2 on bad parameters."""
     # The simulation thread gives up the GIL in every MuJoCo and rcl call; with the default 5 ms switch
@@ -496,21 +517,20 @@ def main(argv: list[str] | None = None) -> int:
     for sig in (signal.SIGINT, signal.SIGTERM):
         signal.signal(sig, lambda *_: stop.set())
     node = None
-    executor = MultiThreadedExecutor(num_threads=4)
-    spinner = None
+    executors: list[MultiThreadedExecutor] = []
+    spinners: list[SpinThread] = []
     code = 0
     try:
         node = UrSimNode()
-        for n in node.nodes():
-            executor.add_node(n)
+        executors = make_executors(node)
         # Everything built so far (models, nodes, messages) lives until exit: out of the collector's sight, its
         # full collections take microseconds instead of milliseconds that the loop thread would wait out.
         gc.freeze()
-        # The executor waits in a thread of its own, woken by work or once a second; this thread waits for the
+        # The executors wait in threads of their own, woken by work or once a second; this thread waits for the
         # signal. (Waking every 0.1 s to look at `stop` rebuilt the wait set of some 150 entities each time: about
         # 3 ms of interpreter time, which the loop thread shared.)
-        spinner = SpinThread(executor, 'ur_sim_executor').start()
-        while not stop.wait(0.5) and rclpy.ok() and spinner.running:
+        spinners = [SpinThread(e, f'ur_sim_executor_{i}').start() for i, e in enumerate(executors)]
+        while not stop.wait(0.5) and rclpy.ok() and all(s.running for s in spinners):
             pass
     except (KeyboardInterrupt, ExternalShutdownException):
         pass
@@ -520,10 +540,11 @@ def main(argv: list[str] | None = None) -> int:
     finally:
         if node is not None:
             node.shutdown()
-        if spinner is not None:
+        for spinner in spinners:
             spinner.stop(timeout=2.0)
-        else:
-            executor.shutdown(timeout_sec=2.0)
+        if not spinners:
+            for executor in executors:
+                executor.shutdown(timeout_sec=2.0)
         if node is not None:
             node.destroy_node()
         rclpy.try_shutdown()
