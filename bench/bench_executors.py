@@ -1,6 +1,7 @@
 """What two executor choices buy, in CPU: the glue client's spin thread on rclpy's EventsExecutor (what
 ``execution/client.py`` uses) against the SingleThreadedExecutor it replaced, and ur_sim's busy nodes on an executor
-of their own (``ros/node.py`` ``make_executors``) against one executor for every node.
+of their own (``ros/node.py`` ``make_executors``: ur_sim's node with the pace topic on an EventsExecutor) against one
+executor for every node.
 
 Why it matters: ``make parts`` runs 100 glue runs beside three simulations on two cores within its 10 minutes; per
 run the client takes about 27,000 messages and ur_sim's executors wake about 2,000 times (the pace topic, the
@@ -99,7 +100,7 @@ def _ur_sim_cpu(split: bool) -> dict:
         node.shutdown()
         node.destroy_node()
         rclpy.try_shutdown(context=context)
-    return {'executors': len(spinners), 'busy_nodes_apart': split, 'messages': PACE_MESSAGES,
+    return {'executors': len(spinners), 'split': split, 'messages': PACE_MESSAGES,
             'cpu_s': round(cpu, 3), 'cpu_per_message_us': round(1e6 * cpu / PACE_MESSAGES, 1)}
 
 

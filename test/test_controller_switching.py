@@ -144,14 +144,14 @@ def test_tool_contact_runs_beside_the_joint_controller_and_freedrive_alone(robot
     assert cm.switch(activate=[SCALED], deactivate=[FREE]).ok
 
 
-def test_effort_is_loaded_but_the_hardware_refuses_it(robot):
+def test_effort_is_loaded_and_the_hardware_refuses_it_beside_the_position_controller(robot):
     cm = robot.cm
     controllers = cm.controllers()
     assert controllers[EFFORT].type == 'effort_controllers/JointGroupEffortController'
     assert controllers[EFFORT].state == 'inactive'
     assert list(controllers[EFFORT].required_command_interfaces) == [f'{j}/effort' for j in robot.joints]
-    for strictness in (STRICT, BEST_EFFORT):  # robot software 5.12.6: torque control needs 5.23
-        response = cm.switch(activate=[EFFORT], deactivate=[SCALED], strictness=strictness)
+    for strictness in (STRICT, BEST_EFFORT):  # torque control runs alone (robot software 5.25.1 has it)
+        response = cm.switch(activate=[EFFORT], strictness=strictness)
         assert (response.ok, response.message) == (False, 'Could not switch controllers since prepare command mode '
                                                           'switch was rejected.')
     assert cm.states()[SCALED] == 'active' and cm.states()[EFFORT] == 'inactive'

@@ -110,7 +110,7 @@ def versioned(ur_type: str, files=None, version=None) -> DashboardServer:
 
 def test_each_series_knows_its_own_commands_only():
     e, cb3 = versioned('ur10e'), versioned('ur10')
-    assert answer(e, 'PolyscopeVersion') == 'URSoftware 5.12.6.0 (simulated)'
+    assert answer(e, 'PolyscopeVersion') == 'URSoftware 5.25.1.0 (simulated)'
     assert answer(cb3, 'PolyscopeVersion') == 'URSoftware 3.15.8.0 (simulated)'
     assert answer(e, 'get robot model') == answer(cb3, 'get robot model') == 'UR10'  # no 'e' in the answer
     assert answer(e, 'get serial number').startswith('20') and answer(e, 'get serial number').isdigit()

@@ -30,7 +30,7 @@ def _component(h):
 
 def test_older_robot_software_refuses():
     # First: its ur_sim shares the test process's domain, so it must be gone before the module's starts.
-    with running_sim() as h:  # 5.12.6: the client library's setFrictionScales needs 5.25.1
+    with running_sim(software_version='5.12.6') as h:  # the client library's setFrictionScales needs 5.25.1
         assert not _set(h, _client(h), **GOOD)
         assert _component(h).scales is None
 

@@ -41,10 +41,6 @@ def test_seed_ur10_preset_names_exist():
     ('initial_joint_controller', 'io_and_status_controller',
      "'initial_joint_controller' = 'io_and_status_controller' is not a joint controller of ur_sim; valid choices: "
      'scaled_joint_trajectory_controller, joint_trajectory_controller, forward_velocity_controller'),
-    ('initial_joint_controller', 'forward_effort_controller',
-     "'initial_joint_controller' = 'forward_effort_controller' cannot be activated: Requested to use effort interface "
-     "on a robot version that doesn't support it. Torque control is available from robot software 5.23.0 / 10.10.0 "
-     'on.; valid choices: scaled_joint_trajectory_controller'),
     ('hardware_components_initial_state.unconfigured', ['ur20'],
      "'hardware_components_initial_state.unconfigured' = ['ur20'] names an unknown hardware component 'ur20'; valid: "
      'ur5e (the component is named after ur_type)'),
@@ -61,6 +57,22 @@ def test_invalid_parameter_names_parameter_value_and_range(name, value, expected
         node.shutdown()  # started after all: shut down, so that no ur_sim is left in this process's domain
         node.destroy_node()
         pytest.fail(f'{name} = {value!r} was accepted; expected ConfigError containing {expected!r}')
+
+
+def test_effort_as_initial_controller_needs_torque_control():
+    with ros_context() as ctx:
+        with pytest.raises(ConfigError) as err:
+            UrSimNode(context=ctx, start=False, parameter_overrides=[
+                Parameter('initial_joint_controller', value='forward_effort_controller'),
+                Parameter('software_version', value='5.12.6')])
+    assert str(err.value).startswith(
+        "parameter 'initial_joint_controller' = 'forward_effort_controller' cannot be activated: Requested to use "
+        "effort interface on a robot version that doesn't support it. Torque control is available from robot "
+        'software 5.23.0 / 10.10.0 on.; valid choices: scaled_joint_trajectory_controller')
+    # The default software (5.25.1) has torque control: the robot starts under it.
+    with running_sim(initial_joint_controller='forward_effort_controller') as h:
+        states = {c.name: c.active for c in h.sim.components if c.is_controller}
+        assert states['forward_effort_controller'] and not states['scaled_joint_trajectory_controller']
 
 
 def _fifo_permitted() -> bool:
@@ -101,7 +113,7 @@ def test_real_time_loop_runs_under_sched_fifo_where_permitted(rtf, priority):
 @pytest.mark.parametrize('args, message', [
     (['ur_type:=ur6'], "'ur_type' = 'ur6' is invalid"),
     # ros2_control_node ends when the hardware cannot reach its initial state: the driver refuses the robot model
-    (['ur_type:=ur20', 'simulated_ur_type:=ur5e'], "The connected robot is of type 'UR5' and version 5.12.6-0 but "
+    (['ur_type:=ur20', 'simulated_ur_type:=ur5e'], "The connected robot is of type 'UR5' and version 5.25.1-0 but "
                                                   "the driver was configured for type 'ur20'")])
 def test_console_script_exits_nonzero_with_message_on_bad_parameter(args, message):
     ros_args = [a for arg in args for a in ('-p', arg)]

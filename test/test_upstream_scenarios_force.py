@@ -191,10 +191,9 @@ def _passthrough_client(h) -> ActionClient:
 
 
 # ---- integration_test_friction_model.py ----------------------------------------------------------------------------
-# URSim 'latest' runs a PolyScope 5 release that has the friction scales (5.25.1 or later); ur_sim's UR5e by default
-# runs 5.12.6, which refuses them as the robot would.
-@pytest.mark.parametrize('driver', [('', {'software_version': '5.25.1'}), ('my_ur_', {'software_version': '5.25.1'})],
-                         indirect=True, ids=IDS)
+# URSim 'latest' runs a PolyScope 5 release that has the friction scales (5.25.1 or later), as ur_sim's UR5e does by
+# default.
+@pytest.mark.parametrize('driver', [('', {}), ('my_ur_', {})], indirect=True, ids=IDS)
 class TestFrictionModel:
     def test_scales_are_set_on_the_robot_and_bad_lists_or_an_inactive_controller_refused(self, robot):
         h = robot

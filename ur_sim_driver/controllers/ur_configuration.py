@@ -1,7 +1,7 @@
 """ur_configuration_controller (ur_controllers/URConfigurationController): the robot's software version.
 
 ``~/get_robot_software_version`` (ur_msgs/GetRobotSoftwareVersion) answers the software version of the simulated
-controller (parameter ``software_version``; by default 5.12.6 for an e-series type, 3.15.8 for a CB3: see
+controller (parameter ``software_version``; by default 5.25.1 for an e-series type, 3.15.8 for a CB3: see
 ``robot/software.py``), as a real robot reports it.
 """
 from __future__ import annotations

@@ -47,10 +47,11 @@ class SoftwareVersion(NamedTuple):
         return f'{self.major}.{self.minor}.{self.bugfix}.{self.build}'
 
 
-# Widely used releases: 5.12.6 (the URSim e-series image many driver users test with), 3.15.8 (a late CB3
-# release, upstream's CB3 dashboard test entry). UR's build numbers are not published with them: build 0 marks
-# the version as a simulated one. Each type's default and first release are facts of its file in config/ur_types.
-E_SERIES_VERSION = SoftwareVersion(5, 12, 6, 0)
+# Widely used releases: 5.25.1 (the newest PolyScope 5 ur_sim knows, what the driver's tests meet as URSim
+# `latest`; the Client Library's CI runs it), 3.15.8 (a late CB3 release, upstream's CB3 dashboard test entry).
+# UR's build numbers are not published with them: build 0 marks the version as a simulated one. Each type's default
+# and first release are facts of its file in config/ur_types.
+E_SERIES_VERSION = SoftwareVersion(5, 25, 1, 0)
 CB3_VERSION = SoftwareVersion(3, 15, 8, 0)
 
 

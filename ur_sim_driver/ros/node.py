@@ -22,7 +22,8 @@ import time
 from pathlib import Path
 
 import rclpy
-from rclpy.executors import ExternalShutdownException, MultiThreadedExecutor
+from rclpy.executors import Executor, ExternalShutdownException, MultiThreadedExecutor
+from rclpy.experimental import EventsExecutor
 from rclpy.node import Node
 from rclpy.qos import DurabilityPolicy, QoSProfile, ReliabilityPolicy
 from rclpy.signals import SignalHandlerOptions
@@ -79,7 +80,7 @@ from ur_sim_driver.spin_thread import SpinThread
 from ur_sim_driver.urscript.runner import ScriptRunner
 
 GIL_SWITCH_INTERVAL = 2e-4  # [s]
-# Nodes spun by an executor of their own besides ur_sim's own node (UrSimNode.busy_nodes).
+# Component nodes woken often enough to spin on an executor of their own (make_executors).
 BUSY_NODES = ('trajectory_until_node',)
 # pace_topic: the client's last word counts, also if it was said before ur_sim subscribed (a client may start first)
 PACE_QOS = QoSProfile(depth=1, durability=DurabilityPolicy.TRANSIENT_LOCAL, reliability=ReliabilityPolicy.RELIABLE)
@@ -227,11 +228,6 @@ class UrSimNode(Node):
     def nodes(self) -> list[Node]:
         """This node, the controller manager's and every component's: an executor spinning ur_sim must spin all."""
         return [self, self.controller_manager.node, *(c.node for c in self.components if c.node is not None)]
-
-    def busy_nodes(self) -> list[Node]:
-        """The nodes of :meth:`nodes` woken most often: this one (``pace_topic``) and the trajectory_until_node (its
-        client of the trajectory action gets every goal's feedback and status)."""
-        return [n for n in self.nodes() if n is self or n.get_name() in BUSY_NODES]
 
     @property
     def jtc(self) -> TrajectoryController:
@@ -491,17 +487,26 @@ class UrSimNode(Node):
         self._robot_files.cleanup()
 
 
-def make_executors(node: UrSimNode, split: bool = True) -> list[MultiThreadedExecutor]:
-    """The executors spinning ur_sim's nodes: with `split`, the busy nodes (:meth:`UrSimNode.busy_nodes`) on one of
-    their own. rclpy's executor walks every entity of its nodes at each wake (about 2 ms for ur_sim's 200 services,
-    subscriptions and event handlers), and the busy ones wake it about 40 times a second of a glue run: apart, half
-    the executors' CPU of a run (``python -m bench executors``). Multi-threaded: service callbacks wait for cycles."""
-    executors = [MultiThreadedExecutor(num_threads=4, context=node.context)]
-    busy = node.busy_nodes() if split else []
-    if busy:
-        executors.append(MultiThreadedExecutor(num_threads=4, context=node.context))
+def make_executors(node: UrSimNode, split: bool = True) -> list[Executor]:
+    """The executors spinning ur_sim's nodes. rclpy's MultiThreadedExecutor walks every entity of its nodes at each
+    wake (about 2 ms for ur_sim's 200 services, subscriptions and event handlers), and two nodes wake it about 40
+    times a second of a glue run each: with `split` they spin apart (``python -m bench executors``):
+
+    * this node, whose only entities besides its parameter services are the pace topic's subscription (none of its
+      callbacks waits), on rclpy's EventsExecutor, which handles an event without walking anything;
+    * the trajectory_until_node (its client of the trajectory action gets every goal's feedback) on a
+      MultiThreadedExecutor of its own: its goal callbacks wait for that client's answers;
+    * the rest on a MultiThreadedExecutor: service callbacks wait for the simulation's cycles.
+    """
+    executors: list[Executor] = [MultiThreadedExecutor(num_threads=4, context=node.context)]
+    if not split:
+        for n in node.nodes():
+            executors[0].add_node(n)
+        return executors
+    own, busy = EventsExecutor(context=node.context), MultiThreadedExecutor(num_threads=4, context=node.context)
+    executors += [own, busy]
     for n in node.nodes():
-        executors[1 if n in busy else 0].add_node(n)
+        (own if n is node else busy if n.get_name() in BUSY_NODES else executors[0]).add_node(n)
     return executors
 
 
@@ -517,7 +522,7 @@ def main(argv: list[str] | None = None) -> int:
     for sig in (signal.SIGINT, signal.SIGTERM):
         signal.signal(sig, lambda *_: stop.set())
     node = None
-    executors: list[MultiThreadedExecutor] = []
+    executors: list[Executor] = []
     spinners: list[SpinThread] = []
     code = 0
     try:
