@@ -153,6 +153,11 @@ class TrajectoryGoal:
         future = self._handle.cancel_goal_async()
         _wait(future.done, timeout, 'no answer to the cancel request')
 
+    @property
+    def executing(self) -> bool:
+        """The server reported the goal executing (or already ended): it has handed it to its controller."""
+        return self._handle.status != GoalStatus.STATUS_ACCEPTED and self._handle.status != GoalStatus.STATUS_UNKNOWN
+
     def wait(self, timeout: float | None = None) -> GoalOutcome:
         """Block until the goal ends (timeout [s] of wall time, None = no limit) and return its outcome."""
         _wait(self._result_future.done, float('inf') if timeout is None else timeout, 'the goal did not end')

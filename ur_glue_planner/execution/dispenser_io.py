@@ -13,6 +13,8 @@ at the end, on failure and on cancel.
 from __future__ import annotations
 
 import threading
+from collections.abc import Iterator
+from contextlib import contextmanager
 from dataclasses import dataclass
 
 from builtin_interfaces.msg import Time
@@ -95,6 +97,7 @@ class DispenserIO:
         self._pace = node.create_publisher(Clock, pace_topic, PACE_QOS) if pace_topic else None
         self._last_joint_state: float | None = None
         self._pace_sent: float | None = None  # the last hold time published
+        self._holds: list[float] = []  # robot times [s] a paced ur_sim must not pass (hold())
         if pace_topic:  # the robot's time while no goal is armed: joint states come every cycle, controller states
             # only while the controller is active
             node.create_subscription(JointState, joint_states, self._on_joint_state, QoSProfile(depth=20))
@@ -127,6 +130,20 @@ class DispenserIO:
             self._clock = self._sequence = None
         self._publish_pace()
         return left
+
+    @contextmanager
+    def hold(self, until: float) -> Iterator[None]:
+        """A paced ur_sim does not run past robot time ``until`` [s] inside this block (for a goal on its way that
+        starts after it); without a pace topic this does nothing."""
+        with self._lock:
+            self._holds.append(until)
+        self._publish_pace()
+        try:
+            yield
+        finally:
+            with self._lock:
+                self._holds.remove(until)
+            self._publish_pace()
 
     def _on_state(self, msg: JointTrajectoryControllerState) -> None:
         stamp = msg.header.stamp.sec + msg.header.stamp.nanosec * 1e-9
@@ -171,7 +188,7 @@ class DispenserIO:
         if clock is not None and sequence is not None and sequence.pending:
             due = clock.start + min(e.t for e in sequence.pending) - 4.0 * sequence.half_period
             hold = min(hold, max(newest, due))
-        hold = min([hold] + [s for _, s, _, f in self._pending if not f.done()])
+        hold = min([hold] + [s for _, s, _, f in self._pending if not f.done()] + list(self._holds))
         # A message per change of half of FREE_AHEAD at most, and every held-back one: each message wakes ur_sim's
         # executor, and one per cycle cost it a third of its time.
         last = self._pace_sent

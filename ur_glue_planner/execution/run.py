@@ -12,6 +12,7 @@ import time
 from collections.abc import Callable
 from pathlib import Path
 
+from ur_glue_planner.errors import ClientError
 from ur_glue_planner.execution.bag_recorder import BagRecorder
 from ur_glue_planner.execution.bead_listener import BeadListener
 from ur_glue_planner.execution.client import GoalOutcome, URClient
@@ -26,6 +27,10 @@ Progress = Callable[[str, float, float], None]
 
 FLOW_FALL = 7.0  # time constants from the flow's fall to below 0.1 % of its rate
 BEAD_DELIVERY = 1.0  # [s] of wall time allowed at least for the bead goal to reach the controller before it starts
+# In step with ur_sim: the bead goal's start this far [s of robot time] beyond the lead; ur_sim is held half of it
+# before the start until the goal executes (the client's view of robot time may lag ur_sim's by FREE_AHEAD).
+PACED_DELIVERY = 0.3
+EXECUTING_TIMEOUT = 30.0  # [s] of wall time for the server to report the bead goal executing (a hang guard)
 RECORD_RATE = 50.0  # [Hz] nominal; the report uses every message received (exact stamps)
 BAG_ROOT = Path('out') / 'bags'  # the bags of runs given no bag directory (the studio's), one per run
 MESSAGES = {
@@ -98,6 +103,16 @@ def start_bag(ur: URClient, plan: GluePlan, bag_dir: str | Path | None,
         return None
 
 
+
+def _wait_executing(goal) -> None:
+    """Until the server reports `goal` executing: ur_sim's gateway hands a goal to the controller before it says so.
+    Wall time passes, robot time does not (ur_sim is held); a poll, as the status has no event to wait on here."""
+    deadline = time.monotonic() + EXECUTING_TIMEOUT
+    while not goal.executing:
+        if time.monotonic() > deadline:
+            raise ClientError(f'the bead goal was not reported executing within {EXECUTING_TIMEOUT:.0f} s')
+        time.sleep(0.001)
+
 def execute(ur: URClient, plan: GluePlan, stop: threading.Event, log: Callable[[str], None] = _print,
             on_progress: Progress | None = None, gun: DispenserIO | None = None,
             bead: BeadListener | None = None, bag_dir: str | Path | None = None,
@@ -135,7 +150,13 @@ def execute(ur: URClient, plan: GluePlan, stop: threading.Event, log: Callable[[
             # Built before the start is chosen: a long goal takes a while to build on a loaded machine.
             request = ur.trajectory_goal(seg.q, seg.qd, seg.qdd, seg.times, path_tolerance=path_tol,
                                          goal_tolerance=goal_tol, goal_time_tolerance=job.tolerances.goal_time)
-            if seg.name == 'bead':
+            paced = seg.name == 'bead' and gun is not None and gun.paced
+            if paced:
+                # In step with ur_sim (pace_topic): it waits before the start until the goal is with its controller
+                # (below), so the stamp needs no margin for the delivery.
+                t0 = start = ur.now() + 0.1 + early + PACED_DELIVERY
+                ahead = start - ur.now()
+            elif seg.name == 'bead':
                 # The bead's start is fixed in advance (the gun switches on its clock): a stamp ahead, with a
                 # margin for the goal's delivery [s of wall time] that grows with the answer times seen so far.
                 t0 = start = ur.start_time(lead=0.1 + early, delivery=BEAD_DELIVERY, points=len(seg.times))
@@ -154,7 +175,12 @@ def execute(ur: URClient, plan: GluePlan, stop: threading.Event, log: Callable[[
                         f'the bead (lead {d.lead:.3f} s, lag {d.lag:.3f} s)')
             log(f'{seg.name}: {len(seg.times)} points, {seg.duration:.2f} s')
             feedback = _progress(seg.name, t0, seg.duration, log, on_progress)
-            goal = ur.send_goal(request, start_time=start, wait=False, feedback_callback=feedback)
+            if paced:
+                with gun.hold(start - PACED_DELIVERY / 2):
+                    goal = ur.send_goal(request, start_time=start, wait=False, feedback_callback=feedback)
+                    _wait_executing(goal)
+            else:
+                goal = ur.send_goal(request, start_time=start, wait=False, feedback_callback=feedback)
             if seg.name == 'bead':
                 log(f'  accepted {1e3 * ur.goal_answers[-1][0]:.0f} ms after sending, its start stamped '
                     f'{ahead:.1f} s ahead')

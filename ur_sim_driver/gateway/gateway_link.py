@@ -86,6 +86,14 @@ class Start:
 
 
 @dataclass(frozen=True)
+class Received:
+    """The simulation has goal `token` in its controller (or has ended it): the gateway reports the goal executing
+    only then, so a client that sees it executing knows the controller has it."""
+
+    token: bytes
+
+
+@dataclass(frozen=True)
 class Cancel:
     """The client asked `controller` to cancel goal `token`."""
 

@@ -45,6 +45,7 @@ from ur_sim_driver.gateway.gateway_link import (
     Ended,
     Feedback,
     GatewayConfig,
+    Received,
     Start,
 )
 from ur_sim_driver.gateway.goal_intake import ArrayGoalActionServer, intake_error
@@ -62,6 +63,7 @@ LARGE_TRAJECTORY = 10_000
 # How long a goal or message waits for the simulation's Admission [s of wall time]: the simulation answers from
 # its receiving thread at once, so only a simulation that is gone or hung takes this long.
 ADMIT_TIMEOUT = 10.0
+RECEIVED_TIMEOUT = 10.0  # [s] of wall time for the simulation to confirm an accepted goal (a hang guard)
 NOT_ANSWERING = 'ur_sim does not answer (shutting down?)'
 NODE_NAME = 'ur_sim_trajectory_gateway'
 _SHUTDOWN = Ended(None, result_codes.INVALID_GOAL, 'ur_sim is shutting down.')
@@ -128,6 +130,7 @@ class TrajectoryGateway:
         self._lock = threading.Lock()
         self._waiters: dict[bytes, _Waiter] = {}
         self._handles: dict[bytes, object] = {}
+        self._received: dict[bytes, threading.Event] = {}  # set when the simulation's controller has the goal
         self._pending: dict[int, CommandArrays] = {}  # converted goals between goal callback and acceptance
         self.passthrough = name in cfg.passthrough
         ns = cfg.namespace.strip('/')
@@ -221,10 +224,19 @@ class TrajectoryGateway:
 
     def _start(self, goal_handle, cmd, tolerances) -> None:
         token = bytes(goal_handle.goal_id.uuid)
+        received = threading.Event()
         with self._lock:
             self._waiters[token] = _Waiter(cmd.count)
             self._handles[token] = goal_handle
+            self._received[token] = received
         self._send(Start(token, cmd, tolerances, self.name))
+        # Reported executing once the simulation's controller has it: a client that holds a paced simulation until
+        # then knows that the goal cannot come after its start (acceptance alone did not tell it: docs/parts.md).
+        if not received.wait(RECEIVED_TIMEOUT):
+            self.log.warning(f'the simulation did not confirm the goal within {RECEIVED_TIMEOUT:.0f} s; reporting it '
+                             'executing anyway')
+        with self._lock:
+            self._received.pop(token, None)
         goal_handle.execute()
 
     def _on_topic(self, data: bytes) -> None:
@@ -293,13 +305,22 @@ class TrajectoryGateway:
         """The simulation is gone: every goal ends."""
         with self._lock:
             waiters = list(self._waiters.values())
+            received = list(self._received.values())
+        for event in received:
+            event.set()
         for waiter in waiters:
             if not waiter.event.is_set():
                 waiter.ended = _SHUTDOWN
                 waiter.event.set()
 
     def dispatch(self, message: object) -> None:
-        """An Ended, Canceled or Feedback for one of this controller's goals."""
+        """A Received, Ended, Canceled or Feedback for one of this controller's goals."""
+        if isinstance(message, Received):
+            with self._lock:
+                received = self._received.get(message.token)
+            if received is not None:
+                received.set()
+            return
         with self._lock:
             waiter = self._waiters.get(message.token)
             handle = self._handles.get(message.token)

@@ -51,7 +51,7 @@ from ur_sim_driver.controllers.tcp_pose_broadcaster import TcpPoseBroadcaster
 from ur_sim_driver.controllers.tool_contact import ToolContactController
 from ur_sim_driver.controllers.ur_configuration import UrConfigurationController
 from ur_sim_driver.errors import UrSimError
-from ur_sim_driver.gateway.gateway_link import Admission, Admit, Dropped, GatewayConfig, GatewayLink
+from ur_sim_driver.gateway.gateway_link import Admission, Admit, Dropped, GatewayConfig, GatewayLink, Received, Start
 from ur_sim_driver.gateway.memory import use_mmap_for_large_blocks
 from ur_sim_driver.motion import conversions as conv
 from ur_sim_driver.motion.jtc import TrajectoryController
@@ -260,6 +260,8 @@ class UrSimNode(Node):
             return
         controller.on_gateway(message)
         self.commands_received += 1
+        if isinstance(message, Start) and message.token is not None:
+            self.gateway.send(Received(message.token))  # the goal is with its controller (or already ended)
 
     # ---- simulation loop (own thread) ------------------------------------------------------------
     def _open_viewer(self):
