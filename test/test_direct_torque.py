@@ -3,7 +3,8 @@ with the believed payload, the friction the compensation scales leave, the effor
 measured motion, and the servo's modes afterwards."""
 import numpy as np
 
-from ur_sim_driver.robot.direct_torque import DEFAULT_SCALES, FrictionScales, felt_friction, motion_limit_cause
+from ur_sim_driver.robot.direct_torque import DEFAULT_SCALES, FrictionScales, felt_friction
+from ur_sim_driver.robot.safety import motion_limit_cause
 from ur_sim_driver.robot.sim_config import sim_config_from_params
 from ur_sim_driver.robot.simulator import Simulator
 

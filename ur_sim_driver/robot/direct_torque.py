@@ -16,8 +16,9 @@ Facts (the UR driver at a16a268 and its client library's External Control script
 ur_sim's joints carry viscous friction (``simulation.damping``) and Coulomb friction (``simulation.coulomb``),
 both estimates per robot type. Under position, velocity and passthrough control the robot's servo cancels the
 Coulomb friction entirely (the simulated arm does not carry it then); under torque control the arm feels what
-the compensation leaves: ``(1 - scale) x friction`` (:func:`felt_friction`). The safety system, which in the
-other modes watches a reference, watches the measured motion here (:func:`motion_limit_cause`).
+the compensation leaves: ``(1 - scale) x friction`` (:func:`felt_friction`). The drives keep every joint within its
+speed limit, as in every mode; the safety system, which in the other modes watches the commanded position, watches
+the measured motion against the position limits here (``safety.motion_limit_cause``).
 """
 from __future__ import annotations
 
@@ -58,28 +59,3 @@ def felt_friction(damping: np.ndarray, coulomb: np.ndarray, scales: FrictionScal
     """The friction the joints feel under torque control: viscous (n,) [N m s/rad] and Coulomb (n,) [N m], what
     the robot's compensation leaves of the joints' `damping` and `coulomb`."""
     return (1.0 - scales.viscous) * damping, (1.0 - scales.coulomb) * coulomb
-
-
-def motion_limit_cause(q: np.ndarray, qd: np.ndarray, q_min: np.ndarray, q_max: np.ndarray, a_stop: np.ndarray,
-                       joint_names: tuple[str, ...]) -> str | None:
-    """Why the safety system stops a robot under torque control, or None: a joint moving towards a position limit
-    that it could not stop before when braking at `a_stop`. (No joint runs faster than its speed limit: the drives
-    do not drive it past it, as under position control.)
-
-    Args:
-        q, qd: (n,) measured positions [rad] and velocities [rad/s].
-        q_min, q_max: (n,) position limits [rad].
-        a_stop: (n,) the deceleration the check assumes [rad/s^2] (below what the robot brakes with, so that the
-            arm stops within the limit).
-        joint_names: n names, for the message.
-    """
-    reach = q + qd * np.abs(qd) / (2.0 * a_stop)  # where each joint would stop
-    upper = (qd > 0.0) & (reach >= q_max)
-    lower = (qd < 0.0) & (reach <= q_min)
-    hit = np.flatnonzero(upper | lower)
-    if hit.size == 0:
-        return None
-    i = int(hit[0])
-    limit = q_max[i] if upper[i] else q_min[i]
-    return (f'{joint_names[i]} would pass its position limit {limit:.4f} rad (position {q[i]:.4f} rad, '
-            f'{qd[i]:.3f} rad/s)')

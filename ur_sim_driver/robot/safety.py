@@ -7,7 +7,8 @@ contacts themselves, so it uses them (:class:`ContactSafety`): a contact of the 
 (parameter ``protective_stop_window``), exceeds :data:`DEFAULT_CONTACT_FORCE` (parameter
 ``protective_stop_force``); and a joint that the command drives into its position limit (the reference beyond
 the limit while the joint is within :data:`LIMIT_MARGIN` of it). A trajectory that ends exactly at a limit is no
-violation.
+violation. Under torque control, where no command bounds the motion, a joint moving towards a limit that it could
+not stop before (:func:`motion_limit_cause`).
 
 The safety system acts on what it sees once armed: while the robot cannot move (a protective stop, powered off,
 brakes engaged) it takes the contacts as they are, and once it can move again a contact present then stops the
@@ -106,14 +107,43 @@ def limit_cause(q: np.ndarray, reference: np.ndarray, q_min: np.ndarray, q_max: 
     if not any_outside(reference, q_min, q_max):
         return None
     upper = (reference > q_max) & (q >= q_max - LIMIT_MARGIN)
-    lower = (reference < q_min) & (q <= q_min + LIMIT_MARGIN)
+    hit = _first_hit(upper, (reference < q_min) & (q <= q_min + LIMIT_MARGIN), q_min, q_max)
+    if hit is None:
+        return None
+    i, limit = hit
+    return (f'{joint_names[i]} driven into its position limit {limit:.4f} rad (position {q[i]:.4f} rad, '
+            f'commanded {reference[i]:.4f} rad)')
+
+
+def motion_limit_cause(q: np.ndarray, qd: np.ndarray, q_min: np.ndarray, q_max: np.ndarray, a_stop: np.ndarray,
+                       joint_names: tuple[str, ...]) -> str | None:
+    """Why the safety system stops a robot under torque control, or None: a joint moving towards a position limit
+    that it could not stop before when braking at `a_stop`. (No joint runs faster than its speed limit: the drives
+    do not drive it past it, as under position control.)
+
+    Args:
+        q, qd: (n,) measured positions [rad] and velocities [rad/s].
+        q_min, q_max: (n,) position limits [rad].
+        a_stop: (n,) the deceleration the check assumes [rad/s^2] (below what the robot brakes with, so that the
+            arm stops within the limit).
+        joint_names: n names, for the message.
+    """
+    reach = q + qd * np.abs(qd) / (2.0 * a_stop)  # where each joint would stop
+    hit = _first_hit((qd > 0.0) & (reach >= q_max), (qd < 0.0) & (reach <= q_min), q_min, q_max)
+    if hit is None:
+        return None
+    i, limit = hit
+    return (f'{joint_names[i]} would pass its position limit {limit:.4f} rad (position {q[i]:.4f} rad, '
+            f'{qd[i]:.3f} rad/s)')
+
+
+def _first_hit(upper: np.ndarray, lower: np.ndarray, q_min: np.ndarray, q_max: np.ndarray) -> tuple[int, float] | None:
+    """The first joint flagged at its upper or lower limit, and that limit [rad]; None when none is."""
     hit = np.flatnonzero(upper | lower)
     if hit.size == 0:
         return None
     i = int(hit[0])
-    limit = q_max[i] if upper[i] else q_min[i]
-    return (f'{joint_names[i]} driven into its position limit {limit:.4f} rad (position {q[i]:.4f} rad, '
-            f'commanded {reference[i]:.4f} rad)')
+    return i, float(q_max[i] if upper[i] else q_min[i])
 
 
 @njit(B1(IN1, IN1, IN1), cache=True)

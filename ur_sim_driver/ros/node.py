@@ -62,10 +62,10 @@ from ur_sim_driver.ports.primary_port import REALTIME, SECONDARY, PrimaryPort
 from ur_sim_driver.ports.rtde_port import RtdePort
 from ur_sim_driver.ports.tcp_port import PortError
 from ur_sim_driver.robot.dashboard_server import DashboardServer
-from ur_sim_driver.robot.direct_torque import STOPJ_DECELERATION, motion_limit_cause
+from ur_sim_driver.robot.direct_torque import STOPJ_DECELERATION
 from ur_sim_driver.robot.encoders import reported_velocity
 from ur_sim_driver.robot.robot_state import NORMAL, RUNNING, RobotState
-from ur_sim_driver.robot.safety import ContactSafety, limit_cause
+from ur_sim_driver.robot.safety import ContactSafety, limit_cause, motion_limit_cause
 from ur_sim_driver.robot.sim_config import PARAMETER_NAMES, SimConfig, sim_config_from_params, unknown_parameters
 from ur_sim_driver.robot.simulator import BRAKE_CAPABILITY, Simulator
 from ur_sim_driver.robot.speed_scaling import RobotSpeedScaling
