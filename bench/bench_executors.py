@@ -39,12 +39,12 @@ PORTS = ('dashboard_server', 'rtde', 'primary', 'secondary', 'realtime')
 
 
 def _client_cpu(executor_class, context: Context) -> dict:
-    saved = client_module.EventsExecutor
-    client_module.EventsExecutor = executor_class  # the client's executor, for this measurement only
+    saved = client_module.events_executor
+    client_module.events_executor = lambda c: executor_class(context=c)  # the client's executor, for this only
     try:
         ur = URClient(context=context, timeout=60.0, node_name=f'bench_{executor_class.__name__.lower()}')
     finally:
-        client_module.EventsExecutor = saved
+        client_module.events_executor = saved
     try:
         thread = ur._spinner._thread
         recorder = ur.start_recording(50.0)  # a recording on: the client takes every joint state, as during a goal

@@ -230,7 +230,7 @@ def test_latched_status_for_a_late_subscriber_and_its_changes():
         assert [m.mode for m, _ in safety.items] == [NORMAL, PROTECTIVE_STOP]
 
         v = version(h)
-        assert (v.major, v.minor) == (5, 12)
+        assert (v.major, v.minor, v.bugfix) == (5, 25, 1)  # the UR5e's default
 
 
 def test_speed_slider_scales_the_reported_factor_and_slows_a_trajectory():

@@ -9,6 +9,7 @@ from ur_sim_driver.controllers.forward_command import ForwardCommandController
 from ur_sim_driver.controllers.joint_state_broadcaster import JointStateBroadcaster
 from ur_sim_driver.errors import ConfigError
 from ur_sim_driver.robot.sim_config import SimConfig
+from ur_sim_driver.robot.software import SoftwareVersion
 from ur_sim_driver.ros.dashboard import DashboardClient
 
 
@@ -31,8 +32,12 @@ def test_initial_joint_controller():
 def test_refusals_name_the_choices():
     with pytest.raises(ConfigError, match='valid choices: scaled_joint_trajectory_controller, joint_trajectory'):
         startup.initial_joint_controller(SimConfig(initial_joint_controller='nope'))
+    old = SimConfig(initial_joint_controller='forward_effort_controller', software_version=SoftwareVersion(5, 12, 6))
     with pytest.raises(ConfigError, match='cannot be activated: Requested to use effort interface'):
-        startup.initial_joint_controller(SimConfig(initial_joint_controller='forward_effort_controller'))
+        startup.initial_joint_controller(old)
+    # Torque control from 5.23.0 on (the UR5e's default 5.25.1 has it).
+    torque = SimConfig(initial_joint_controller='forward_effort_controller')
+    assert startup.initial_joint_controller(torque) == 'forward_effort_controller'
 
 
 def test_hardware_not_active_starts_no_controller():

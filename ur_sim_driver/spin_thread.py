@@ -7,10 +7,13 @@ thread may still be inside a wait. That thread then dies with ``'NoneType' objec
 """
 from __future__ import annotations
 
+import io
+import sys
 import threading
 from collections.abc import Callable
 
 from rclpy.executors import Executor, ExternalShutdownException
+from rclpy.experimental import EventsExecutor
 
 WAKE_PERIOD = 1.0  # [s] longest wait of one spin_once; stop() wakes the executor at once anyway
 
@@ -69,3 +72,18 @@ class SpinThread:
             return False
         self.executor.shutdown(timeout_sec=timeout)
         return True
+
+
+def events_executor(context) -> Executor:
+    """rclpy's EventsExecutor on `context`. Its factory enables faulthandler on ``sys.stderr``, which needs a file
+    descriptor: where stderr has none (a capture such as pytest's capsys) the process's own stderr stands in for
+    that moment."""
+    stderr = sys.stderr
+    try:
+        stderr.fileno()
+    except (AttributeError, ValueError, io.UnsupportedOperation):
+        sys.stderr = sys.__stderr__
+    try:
+        return EventsExecutor(context=context)
+    finally:
+        sys.stderr = stderr

@@ -117,6 +117,7 @@ READERS: dict[str, Callable[[Host], object]] = {
     'timestamp': lambda h: h.sim.time,
     'target_q': lambda h: _target(h, 0), 'target_qd': lambda h: _target(h, 1), 'target_qdd': lambda h: _target(h, 2),
     'target_moment': lambda h: _vec(h.sim.state().effort),
+    'actual_current_as_torque': lambda h: _vec(h.sim.state().effort),  # the simulated motors' torques [N m]
     'actual_q': lambda h: _vec(h.sim.state().q),
     'actual_qd': lambda h: _vec(reported_velocity(h.sim.state().qd, h.sim.control_dt)),
     'actual_TCP_pose': _pose, 'actual_TCP_force': _force, 'tcp_offset': lambda h: (0.0,) * 6,

@@ -23,7 +23,6 @@ from pathlib import Path
 
 import rclpy
 from rclpy.executors import Executor, ExternalShutdownException, MultiThreadedExecutor
-from rclpy.experimental import EventsExecutor
 from rclpy.node import Node
 from rclpy.qos import DurabilityPolicy, QoSProfile, ReliabilityPolicy
 from rclpy.signals import SignalHandlerOptions
@@ -76,7 +75,7 @@ from ur_sim_driver.ros.sim_io import SimulatedInputs
 from ur_sim_driver.ros.sim_wrench import AppliedWrenches
 from ur_sim_driver.ros.trajectory_until import TrajectoryUntilNode
 from ur_sim_driver.ros.urscript_interface import URScriptInterface
-from ur_sim_driver.spin_thread import SpinThread
+from ur_sim_driver.spin_thread import SpinThread, events_executor
 from ur_sim_driver.urscript.runner import ScriptRunner
 
 GIL_SWITCH_INTERVAL = 2e-4  # [s]
@@ -505,7 +504,7 @@ def make_executors(node: UrSimNode, split: bool = True) -> list[Executor]:
         for n in node.nodes():
             executors[0].add_node(n)
         return executors
-    own, busy = EventsExecutor(context=node.context), MultiThreadedExecutor(num_threads=4, context=node.context)
+    own, busy = events_executor(node.context), MultiThreadedExecutor(num_threads=4, context=node.context)
     executors += [own, busy]
     for n in node.nodes():
         (own if n is node else busy if n.get_name() in BUSY_NODES else executors[0]).add_node(n)
