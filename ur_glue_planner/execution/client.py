@@ -26,6 +26,7 @@ from control_msgs.action import FollowJointTrajectory
 from control_msgs.msg import JointTolerance
 from rcl_interfaces.msg import Log
 from rclpy.context import Context
+from rclpy.executors import SingleThreadedExecutor
 from rclpy.node import Node
 from rclpy.qos import DurabilityPolicy, QoSProfile
 from sensor_msgs.msg import JointState
@@ -35,7 +36,7 @@ from ur_glue_planner.errors import ClientError
 from ur_glue_planner.execution import ros_conversions as conv
 from ur_glue_planner.motion.kinematics import IkResult, Kinematics
 from ur_sim_driver.action_client import ActionClient
-from ur_sim_driver.spin_thread import SpinThread, events_executor
+from ur_sim_driver.spin_thread import SpinThread
 
 DEFAULT_CONTROLLER = 'scaled_joint_trajectory_controller'
 IDLE_PACE = 0.002  # [s] rest of the client's spinning thread after a callback while nothing runs or records
@@ -212,9 +213,7 @@ class URClient:
                                                  10)
         self._action = ActionClient(self.node, FollowJointTrajectory, self.action_name)
         self._goals: weakref.WeakSet[TrajectoryGoal] = weakref.WeakSet()
-        # rclpy's EventsExecutor: about a quarter of the CPU of the SingleThreadedExecutor, which rebuilds its wait
-        # set at each wake (python -m bench executors: 76 against 274 ms a second of robot time at 500 Hz).
-        self._executor = events_executor(context)
+        self._executor = SingleThreadedExecutor(context=context)
         self._executor.add_node(self.node)
         self._spinner = SpinThread(self._executor, 'ur_client', pace=self._pace).start()
         try:
