@@ -14,15 +14,15 @@ so the velocity, acceleration and position limits hold as for any reference:
 * effort: the commanded joint torques, on top of the robot's gravity compensation and within its effort limits
   (``Simulator.advance_torque``, ``robot/direct_torque.py``); the hardware starts effort mode only on robot
   software 5.23.0 / 10.10.0 or later, and only without another joint mode. Until the first message the torques
-  are zero (the arm, gravity-compensated, stays where it is); the robot's safety system stops it when a joint
-  exceeds its speed limit or could no longer stop before a position limit.
+  are zero (the arm, gravity-compensated, stays where it is); no joint is driven past its speed limit, and the
+  robot's safety system stops a joint that could no longer stop before a position limit.
 
 A message with the wrong number of values or a non-finite value is refused with a log line naming it (upstream
 logs the size in its update and keeps the previous command; refusing it on arrival keeps the same command).
 While the controller is inactive its messages are dropped, and activation starts from no command: the robot
 holds the position (position), stands still (velocity) or gets zero torques (effort) until the first message, as
 upstream resets its command buffer on activation. Deactivated, the effort controller's torques are gone (the
-hardware zeroes them) and the robot holds the position where it was deactivated.
+hardware zeroes them) and the robot brakes as the driver's program does (stopj) and holds where it comes to rest.
 """
 from __future__ import annotations
 

@@ -177,9 +177,9 @@ class Simulator:
     def advance_torque(self, state: ArmState, torques: np.ndarray) -> np.ndarray:
         """Torque control (direct_torque) for one control period: `torques` (n,) [N m] on top of the robot's gravity
         compensation (:meth:`gravity_compensation`), within the effort limits and without driving a joint past its
-        speed limit (as under position control); the joints feel the friction the
-        robot's compensation leaves (``direct_torque.felt_friction``). Returns the motor torques (n,) [N m]. The
-        servo restarts from the measured state, so that position control resumes without a jump."""
+        speed limit (as under position control); the joints feel the friction the robot's compensation leaves
+        (``direct_torque.felt_friction``). Returns the motor torques (n,) [N m]. The servo restarts from the
+        measured state, so that position control resumes without a jump."""
         p = self.params
         if self._felt_scales is not self.friction_scales:
             self._felt_scales = self.friction_scales

@@ -434,7 +434,8 @@ class UrSimNode(Node):
     def _safety_check(self, sample, contacts, torque_control: bool) -> str | None:
         """Under the lock, after the physics step: the cause of a protective stop, or None. The checks are armed
         while the robot can move (RUNNING, NORMAL); see ``safety.py``. Under torque control no reference bounds the
-        motion: the measured stopping distances are checked against the position limits (``direct_torque.py``)."""
+        motion: the measured stopping distances are checked against the position limits
+        (``safety.motion_limit_cause``)."""
         armed = self.robot.robot_mode == RUNNING and self.robot.safety_mode == NORMAL
         cause = self.contact_safety.update(contacts, armed)
         if cause is None and armed:
