@@ -76,12 +76,17 @@ class Lockstep:
         takes messages, and a loaded machine let 1000 queued messages overflow (the oldest are dropped)."""
         if not self._views:
             return
-        t = self.node.sim.time - self.node.sim.control_dt  # the stamp of the last cycle published
+        t = _last_stamp(self.node)
         deadline = time.monotonic() + TIMEOUT
         while any(_lags(view(), t - self.LAG) for view in self._views):
             if time.monotonic() > deadline:
                 raise TimeoutError(f'a followed listener stayed more than {self.LAG} s of robot time behind {t:.3f} s')
             time.sleep(0.0005)  # polling a condition that DDS delivery changes; no cycle passes meanwhile
+
+
+def _last_stamp(node: UrSimNode) -> float:
+    """The stamp [s] of the last cycle published, as a client reads it (followed views return such stamps)."""
+    return node.clock.origin_ns * 1e-9 + node.sim.time - node.sim.control_dt
 
 
 def _lags(seen: float | None, due: float) -> bool:
@@ -142,7 +147,7 @@ class Pacer:
     def _may_step(self) -> bool:
         if self._holds:
             return False
-        t = self.node.sim.time - self.node.sim.control_dt  # the stamp of the last cycle published
+        t = _last_stamp(self.node)
         return all(view() >= t - self.LAG for view in self._views)
 
     def _run(self) -> None:
@@ -288,7 +293,7 @@ def trajectory(names, points) -> JointTrajectory:
 
 @dataclass
 class Recording:
-    """Joint states received: stamps (K,) [s], positions and velocities (K, n)."""
+    """Joint states received: their stamps as simulated time (K,) [s], positions and velocities (K, n)."""
 
     t: list = field(default_factory=list)
     q: list = field(default_factory=list)
@@ -345,7 +350,7 @@ class SimHarness:
     def _on_js(self, msg: JointState) -> None:
         rec = self.recording
         if rec is not None:
-            rec.t.append(msg.header.stamp.sec + msg.header.stamp.nanosec * 1e-9)
+            rec.t.append(self.sim.clock.sim_time(msg.header.stamp))
             rec.q.append(list(msg.position))
             rec.qd.append(list(msg.velocity))
             rec.effort.append(list(msg.effort))
@@ -377,7 +382,7 @@ class SimHarness:
     def _recorded_until(self) -> float | None:
         """The stamp [s] of the newest joint state recorded, None before the first."""
         rec = self.recording
-        return rec.t[-1] if rec is not None and rec.t else None
+        return self.sim.clock.origin_ns * 1e-9 + rec.t[-1] if rec is not None and rec.t else None
 
     def listen(self, msg_type, topic: str, callback, depth: int = 1000, latched: bool = False):
         """Subscribe `callback` on a node with its own executor and thread until the returned callable is called

@@ -8,7 +8,6 @@ from ur_msgs.srv import SetIO, SetSpeedSliderFraction
 from ur_glue_planner.errors import ClientError
 from ur_glue_planner.execution.dispenser_io import DispenserIO, dispenser_for
 from ur_glue_planner.execution.switch_timer import SwitchEvent
-from ur_sim_driver.motion import conversions as conv
 
 PIN = 16
 STATE = '/scaled_joint_trajectory_controller/controller_state'
@@ -67,7 +66,7 @@ def test_a_switch_follows_the_robots_speed_scaling_under_the_scaled_controller(g
         wait_for(lambda: gun.robot_factor == 0.5, what='the robot factor at the gun')
         start = h.sim.sim.time + 0.1
         goal = h.goal([point(h.q + 0.05, 1.0, [0.0] * 6)])
-        goal.trajectory.header.stamp = conv.sec_to_time(start)
+        goal.trajectory.header.stamp = h.sim.clock.stamp(start)
         gun.arm([SwitchEvent(0.4, PIN, True, 'bead start')], start)
         handle = h.send(goal)
         assert handle.accepted

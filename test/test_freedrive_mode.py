@@ -12,8 +12,6 @@ from geometry_msgs.msg import WrenchStamped
 from sim_harness import running_sim, wait_for, wait_still
 from std_msgs.msg import Bool
 
-from ur_sim_driver.motion import conversions as conv
-
 NAME = 'freedrive_mode_controller'
 SCALED = 'scaled_joint_trajectory_controller'
 LINK = 'wrist_3_link'
@@ -40,7 +38,7 @@ def push(h, wrench, force=PUSH, duration=PUSH_TIME) -> np.ndarray:
     msg = WrenchStamped()
     msg.header.frame_id = LINK
     end = h.sim.sim.time + duration
-    msg.header.stamp = conv.sec_to_time(end)
+    msg.header.stamp = h.sim.clock.stamp(end)
     msg.wrench.force.x, msg.wrench.force.y, msg.wrench.force.z = force
     wrench.publish(msg)
     wait_for(lambda: h.sim.sim.time > end + 1.0, what='the push and a second after it')

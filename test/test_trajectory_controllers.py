@@ -43,7 +43,7 @@ def _run(h, name, goal):
 
 
 def _query(h, name, t):
-    return wait_answer(h.query[name].call_async(QueryTrajectoryState.Request(time=conv.sec_to_time(t))),
+    return wait_answer(h.query[name].call_async(QueryTrajectoryState.Request(time=h.sim.clock.stamp(t))),
                        'query_state')
 
 

@@ -40,6 +40,9 @@ from ur_sim_driver.spin_thread import SpinThread
 
 DEFAULT_CONTROLLER = 'scaled_joint_trajectory_controller'
 IDLE_PACE = 0.002  # [s] rest of the client's spinning thread after a callback while nothing runs or records
+# Two stamps this close [s] are the same time: a stamp is exact to the nanosecond, but as float seconds on the
+# system clock (the real driver's, ur_sim's in real time; about 1.8e9 s) it resolves only about 0.24 us.
+STAMP_TIE = 1e-6
 DELIVERY_FACTOR = 4.0  # x the slowest goal answer seen so far: a loaded machine gets a margin in proportion
 STATUS_NAMES = {GoalStatus.STATUS_SUCCEEDED: 'succeeded', GoalStatus.STATUS_ABORTED: 'aborted',
                 GoalStatus.STATUS_CANCELED: 'canceled'}
@@ -118,15 +121,15 @@ class JointStateRecorder:
             raise ClientError('no joint states were received while recording')
         stamps = np.array([s.t for s in self.samples])
         t0 = self.start()
-        covered = int(np.floor((stamps[-1] - t0) * self.rate + 1e-9)) + 1
+        covered = int(np.floor((stamps[-1] - t0 + STAMP_TIE) * self.rate)) + 1
         if covered <= 0:
             raise ClientError(f'no joint states at or after the recording start t0 = {t0:.3f} s '
                               f'(newest stamp {stamps[-1]:.3f} s)')
         count = covered if duration is None else min(covered, round(duration * self.rate))
-        grid = t0 + np.arange(count) / self.rate
-        picks = np.maximum(np.searchsorted(stamps, grid + 1e-9, side='right') - 1, 0)
+        grid = np.arange(count) / self.rate
+        picks = np.maximum(np.searchsorted(stamps, t0 + grid + STAMP_TIE, side='right') - 1, 0)
         chosen = [self.samples[i] for i in picks]
-        return Recording(grid - grid[0], np.array([s.q for s in chosen]), np.array([s.qd for s in chosen]),
+        return Recording(grid, np.array([s.q for s in chosen]), np.array([s.qd for s in chosen]),
                          np.array([s.effort for s in chosen]))
 
 

@@ -23,6 +23,7 @@ import numpy as np
 from builtin_interfaces.msg import Time
 from rclpy.node import Node
 
+from ur_sim_driver.motion.conversions import RobotClock
 from ur_sim_driver.motion.trajectory import TrajectorySample
 from ur_sim_driver.physics.physics import ArmState
 
@@ -86,6 +87,7 @@ class Host:
         dashboard: the robot's dashboard command interpreter, one for the ROS services and the TCP port (under
             `lock`).
         scripts: the controller's URScript program slot (under `lock`).
+        clock: simulated time <-> stamps (``conversions.RobotClock``): every stamp a component sends or reads.
     """
 
     cfg: SimConfig
@@ -97,6 +99,7 @@ class Host:
     robot_files: Path | None = None
     dashboard: DashboardServer | None = None
     scripts: ScriptRunner | None = None
+    clock: RobotClock = RobotClock()
     # Conditions a service callback waits for, each with the event the loop sets once it holds (under `lock`).
     _waiters: list[tuple[Callable[[], bool], threading.Event]] = field(default_factory=list)
 

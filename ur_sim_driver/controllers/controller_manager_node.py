@@ -181,7 +181,7 @@ class ControllerManagerNode:
     def publish_activity(self) -> None:
         """``~/activity``: the states of every controller and of the hardware component."""
         msg = ControllerManagerActivity()
-        msg.header.stamp = conv.sec_to_time(self.host.sim.time)
+        msg.header.stamp = self.host.clock.stamp(self.host.sim.time)
         msg.controllers = [NamedLifecycleState(name=n, state=State(id=_CONTROLLER_IDS[s], label=s))
                            for n, s in self.manager.states.items()]
         msg.hardware_components = [NamedLifecycleState(name=self.hardware.name, state=State(

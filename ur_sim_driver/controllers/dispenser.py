@@ -33,7 +33,6 @@ from std_srvs.srv import Trigger
 from ur_sim_driver.controllers.base import Component, Cycle, Host
 from ur_sim_driver.description.bead import Bead, to_cloud
 from ur_sim_driver.description.tool import get_tool
-from ur_sim_driver.motion.conversions import sec_to_time
 from ur_sim_driver.robot.dispenser import MAX_STANDOFF, BeadTrack, FlowState, flow_step
 
 PUBLISH_PERIOD = 0.1  # [s] of simulated time between bead messages while it grows
@@ -151,7 +150,7 @@ class SimulatedDispenser(Component):
             self._track = BeadTrack(self.params.nozzle)
             self._published_len = 0
             self._lost_warned = False
-        msg = to_cloud(Bead.empty(), self.frame_id, sec_to_time(self.host.sim.time))
+        msg = to_cloud(Bead.empty(), self.frame_id, self.host.clock.stamp(self.host.sim.time))
         self._pub.publish(msg)
         res.success = True
         res.message = (f'glue bead cleared ({len(old.bead())} points, {old.deposited * _ML:.3f} ml deposited, '

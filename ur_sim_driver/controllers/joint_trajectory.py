@@ -227,7 +227,7 @@ class JointTrajectoryControllerComponent(JointCommandController):
 
     def _on_query(self, request: QueryTrajectoryState.Request,
                   response: QueryTrajectoryState.Response) -> QueryTrajectoryState.Response:
-        t = conv.time_to_sec(request.time)
+        t = self.host.clock.sim_time(request.time)
         with self.host.lock:
             active, trajectory = self.active, self.core.trajectory
             sample = trajectory.sample(t) if active and trajectory is not None else None

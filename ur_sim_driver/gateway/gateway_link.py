@@ -38,6 +38,7 @@ from multiprocessing.connection import Connection
 import numpy as np
 
 from ur_sim_driver.motion.command_arrays import CommandArrays
+from ur_sim_driver.motion.conversions import RobotClock
 from ur_sim_driver.motion.passthrough import PassthroughTolerances
 from ur_sim_driver.motion.trajectory_types import SegmentTolerances
 
@@ -59,6 +60,7 @@ class GatewayConfig:
         defaults: the controller's default tolerances (resolved with each goal's in the gateway).
         passthrough: the controllers among `controllers` served with passthrough_trajectory_controller's rules
             (``passthrough.py``; no joint_trajectory topic).
+        clock: the stamps' origin (ur_sim's; the gateway converts the stamps it receives and sends with it).
     """
 
     controllers: tuple[str, ...]
@@ -72,6 +74,7 @@ class GatewayConfig:
     allow_nonzero_end_velocity: bool
     defaults: SegmentTolerances
     passthrough: tuple[str, ...] = ()
+    clock: RobotClock = RobotClock()
 
 
 @dataclass(frozen=True, eq=False)

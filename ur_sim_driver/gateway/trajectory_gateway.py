@@ -22,6 +22,7 @@ import sys
 import threading
 import time
 import traceback
+from dataclasses import replace
 from multiprocessing.connection import Connection
 
 import rclpy
@@ -147,9 +148,11 @@ class TrajectoryGateway:
 
     # ---- validation --------------------------------------------------------------------------------
     def _validate(self, cmd: CommandArrays, what: str, now: float) -> str | None:
-        """Why `cmd` is refused by the driver's rules, or None; `now` [s]: the simulated time."""
+        """Why `cmd` is refused by the driver's rules, or None; `now` [s]: the simulated time. Checked on the
+        stamps' clock, so that a message quotes the client's own stamp."""
         cfg = self.cfg
         strict = cfg.strict_limits
+        now += cfg.clock.origin_ns * 1e-9
         # The passthrough controller needs every joint and does not look at the end velocity.
         reason = validate_trajectory(
             cmd, joint_names_config=cfg.joints, now=now, q_min=cfg.q_min if strict else None,
@@ -164,6 +167,12 @@ class TrajectoryGateway:
             elif note is not None:
                 self.log.info(f'{what} {note.text}')
         return reason
+
+    def _on_sim_time(self, cmd: CommandArrays) -> CommandArrays:
+        """`cmd` with its start stamp as the simulation counts time (the stamps' origin taken off)."""
+        if cmd.header_stamp == 0.0 or not self.cfg.clock.origin_ns:
+            return cmd
+        return replace(cmd, header_stamp=self.cfg.clock.sim_seconds(cmd.header_stamp))
 
     def _on_goal(self, goal: FollowJointTrajectory.Goal) -> GoalResponse:
         try:
@@ -195,7 +204,7 @@ class TrajectoryGateway:
         if reason is not None:
             self.log.error(f'Rejected FollowJointTrajectory goal: {reason}')
             return GoalResponse.REJECT
-        self._pending[id(goal)] = cmd
+        self._pending[id(goal)] = self._on_sim_time(cmd)
         return GoalResponse.ACCEPT
 
     def _busy(self) -> bool:
@@ -257,6 +266,7 @@ class TrajectoryGateway:
             self.log.error(f'Dropped JointTrajectory message: {reason}')
             self._send(Dropped(self.name))
             return
+        cmd = self._on_sim_time(cmd)
         self._send(Start(None, cmd, None, self.name))
         if cmd.count >= LARGE_TRAJECTORY:
             del cmd
@@ -335,7 +345,7 @@ class TrajectoryGateway:
                 waiter.event.set()
         elif isinstance(message, Feedback) and handle is not None:
             fb = FollowJointTrajectory.Feedback()
-            fb.header.stamp = conv.sec_to_time(message.t)
+            fb.header.stamp = self.cfg.clock.stamp(message.t)
             fb.joint_names = list(self.cfg.joints)
             fb.desired = conv.trajectory_point(*message.desired)
             fb.desired.time_from_start = conv.sec_to_duration(message.desired_time)

@@ -3,6 +3,7 @@ from __future__ import annotations
 
 from array import array
 from collections.abc import Sequence
+from dataclasses import dataclass
 
 import numpy as np
 from builtin_interfaces.msg import Duration, Time
@@ -21,17 +22,6 @@ def time_to_sec(t: Time) -> float:
     return t.sec + t.nanosec * 1e-9
 
 
-def sec_to_time(t: float) -> Time:
-    """[s] -> builtin_interfaces/Time (non-negative)."""
-    sec, nanosec = time_parts(t)
-    return Time(sec=sec, nanosec=nanosec)
-
-
-def time_parts(t: float) -> tuple[int, int]:
-    """[s] -> (sec, nanosec) of a builtin_interfaces/Time (non-negative)."""
-    return divmod(max(0, round(t * 1e9)), 1_000_000_000)
-
-
 def duration_parts(t: float) -> tuple[int, int]:
     """[s] -> (sec, nanosec) of a builtin_interfaces/Duration, which may be negative: sec rounds down, nanosec is in
     [0, 1e9) (-0.3 s is sec -1, nanosec 700000000)."""
@@ -42,6 +32,37 @@ def sec_to_duration(t: float) -> Duration:
     """[s] -> builtin_interfaces/Duration (negative allowed)."""
     sec, nanosec = duration_parts(t)
     return Duration(sec=sec, nanosec=nanosec)
+
+
+@dataclass(frozen=True)
+class RobotClock:
+    """Simulated time [s] and the stamps on the wire: a stamp is `origin_ns` plus the simulated time.
+
+    The real driver stamps with the system clock. Running in real time, ur_sim's origin is the wall clock at start,
+    so its stamps read as the driver's do (a tf lookup at the client's now finds them); otherwise 0, and clients use
+    /clock (use_sim_time). A zero stamp stays zero both ways: on the wire it means "now" / "no end".
+    """
+
+    origin_ns: int = 0
+
+    def parts(self, t: float) -> tuple[int, int]:
+        """Simulated time `t` [s] -> (sec, nanosec) of its stamp."""
+        return divmod(self.origin_ns + max(0, round(t * 1e9)), 1_000_000_000)
+
+    def stamp(self, t: float) -> Time:
+        """Simulated time `t` [s] -> its builtin_interfaces/Time."""
+        sec, nanosec = self.parts(t)
+        return Time(sec=sec, nanosec=nanosec)
+
+    def sim_seconds(self, stamp: float) -> float:
+        """A stamp in seconds, as read from a message -> simulated time [s] (0.0 stays 0.0; one before the origin is
+        negative, in the past)."""
+        return stamp - self.origin_ns * 1e-9 if stamp != 0.0 else 0.0
+
+    def sim_time(self, stamp: Time) -> float:
+        """builtin_interfaces/Time -> simulated time [s], exactly to the nanosecond (zero stays 0.0)."""
+        ns = stamp.sec * 1_000_000_000 + stamp.nanosec
+        return (ns - self.origin_ns) * 1e-9 if ns else 0.0
 
 
 def trajectory_command(msg: JointTrajectory) -> TrajectoryCommand:

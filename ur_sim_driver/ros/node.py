@@ -139,13 +139,16 @@ class UrSimNode(Node):
         params = self.sim.params
         trajectory_names = (ctrl,) if ctrl == UNSCALED_CONTROLLER else (ctrl, UNSCALED_CONTROLLER)
         self._trajectory: dict[str, JointTrajectoryControllerComponent] = {}
+        # Stamps: in real time they read as the system clock, as the driver's do (conversions.RobotClock).
+        real_time = self.cfg.real_time_factor > 0.0 and not self.cfg.pace_topic
+        self.clock = conv.RobotClock(time.time_ns() if real_time else 0)
         self.gateway = GatewayLink(GatewayConfig(
             controllers=(*trajectory_names, PassthroughTrajectoryController.name),
             passthrough=(PassthroughTrajectoryController.name,), namespace=self.cfg.namespace, joints=self.joints,
             q_min=params.q_min, q_max=params.q_max, v_max=params.v_max, strict_limits=self.cfg.strict_limit_checks,
             allow_partial=self.cfg.allow_partial_joints_goal,
             allow_nonzero_end_velocity=self.cfg.allow_nonzero_velocity_at_trajectory_end,
-            defaults=self._defaults), self._on_gateway)
+            defaults=self._defaults, clock=self.clock), self._on_gateway)
 
         # The driver's controllers and nodes, one module each; the controller manager holds them.
         # The robot's file system for this run (the dashboard's flight reports and support files).
@@ -155,7 +158,7 @@ class UrSimNode(Node):
                                lambda text: self.get_logger().info(f'textmsg: {text}'))
         self.host = Host(self.cfg, self.sim, self._lock, self.robot, self.scaling, self.context, files,
                          DashboardServer(self.robot, self.cfg.simulated_ur_type, self.cfg.software_version, files),
-                         scripts)
+                         scripts, self.clock)
         feedback_every = round(self.sim.control_rate / self.cfg.action_monitor_rate)
         for name in trajectory_names:
             core = TrajectoryController(self.joints, self._defaults, self.sim.state().q, params.v_max,
@@ -284,6 +287,9 @@ class UrSimNode(Node):
         rtf = self.cfg.real_time_factor
         wall_period = dt / rtf if rtf > 0 else 0.0
         next_wall = time.perf_counter()
+        # Stamped from the wall clock at start (self.clock): the first cycles catch up the time since.
+        starting = (time.time_ns() - self.clock.origin_ns) * 1e-9 if self.clock.origin_ns else 0.0
+        next_wall -= starting
         if wall_period > 0.0:
             self._real_time_priority()
         try:
@@ -300,7 +306,7 @@ class UrSimNode(Node):
                     delay = next_wall - time.perf_counter()
                     if delay > 0.0:
                         time.sleep(delay)
-                    elif delay < -_CATCH_UP_LIMIT:
+                    elif delay < -_CATCH_UP_LIMIT and self.sim.time > starting:
                         next_wall = time.perf_counter()
                 # As fast as possible the loop never yields on its own: the executor's threads get the GIL within
                 # the switch interval (GIL_SWITCH_INTERVAL) when they ask for it. A sleep(0) every 8 cycles cost
@@ -322,7 +328,7 @@ class UrSimNode(Node):
 
     def _on_pace(self, msg: Clock) -> None:
         with self._pace_changed:
-            t = msg.clock.sec + msg.clock.nanosec * 1e-9
+            t = self.clock.sim_time(msg.clock)
             self._paced = t  # the newest, even if earlier: a client may hold the simulation back (a switch ahead)
             self._pace_changed.notify_all()
 
@@ -417,7 +423,7 @@ class UrSimNode(Node):
             self._last_read = (reported, tcp_position, tcp_orientation, wrench)
         # Not read (the driver is disconnected): the state interfaces keep the values last read.
         measured, tcp_position, tcp_orientation, wrench = self._last_read
-        cycle = Cycle(self._cycle, state.t, conv.time_parts(state.t), measured, sample, tau, robot_factor,
+        cycle = Cycle(self._cycle, state.t, self.clock.parts(state.t), measured, sample, tau, robot_factor,
                       tcp_position, tcp_orientation, wrench)
         for component in self.components:
             if component.active:

@@ -22,7 +22,6 @@ from ur_sim_driver.controllers.cdr_template import CdrTemplate
 from ur_sim_driver.description.params import load_ur_params, matrix_to_quat
 from ur_sim_driver.description.tool import get_tool
 from ur_sim_driver.description.urdf import JointSpec, build_urdf, kinematic_tree
-from ur_sim_driver.motion import conversions as conv
 
 _Z = np.array([0.0, 0.0, 1.0])
 
@@ -64,7 +63,7 @@ class RobotStatePublisher(Component):
         # verify_robot_model off a mismatch runs, and /tf is then as wrong as the driver's would be).
         described = load_ur_params(cfg.ur_type)
         tree = kinematic_tree(described, cfg.tf_prefix, get_tool(cfg.tool))
-        stamp = conv.sec_to_time(sim.time)
+        stamp = host.clock.stamp(sim.time)
         static = []
         for joint in tree:
             if joint.index is None:

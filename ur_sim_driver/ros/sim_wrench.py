@@ -5,8 +5,8 @@
 * ``header.frame_id``: the body to push, a link of the robot as the URDF names it (``wrist_3_link``,
   ``forearm_link``, with the tf_prefix where one is configured) or the tool's body;
 * ``wrench``: force [N] and torque [N m] in the robot's base frame, acting at the body's centre of mass;
-* ``header.stamp``: the simulated time at which the push ends; zero: it lasts until the next message for that
-  body. A zero wrench removes the push at once.
+* ``header.stamp``: the time at which the push ends, on ur_sim's clock (its /clock); zero: it lasts until the
+  next message for that body. A zero wrench removes the push at once.
 
 The push acts on the physics from the next control cycle on, like any external force: the robot's servo resists
 it (position control), freedrive yields to it, and the flange's force-torque sensor feels it where it acts on
@@ -21,7 +21,6 @@ from rclpy.callback_groups import MutuallyExclusiveCallbackGroup
 from rclpy.node import Node
 
 from ur_sim_driver.controllers.base import Component, Cycle, Host
-from ur_sim_driver.motion import conversions as conv
 
 TOPIC = 'ur_sim/apply_wrench'
 
@@ -57,7 +56,7 @@ class AppliedWrenches(Component):
         if not np.all(np.isfinite(values)):
             log.error(f'refused: the wrench on {name} has a non-finite value: {values.tolist()}')
             return
-        end = conv.time_to_sec(msg.header.stamp)
+        end = self.host.clock.sim_time(msg.header.stamp)
         with self.host.lock:
             physics.set_external_wrench(body, values[:3], values[3:])
             if values.any() and end > 0.0:
@@ -65,7 +64,7 @@ class AppliedWrenches(Component):
             else:
                 self._ends.pop(body, None)
         log.info(f'push on {name}: force {values[:3].tolist()} N, torque {values[3:].tolist()} N m'
-                 + (f' until t = {end:.3f} s' if values.any() and end > 0.0 else ''))
+                 + (f' until simulated t = {end:.3f} s' if values.any() and end > 0.0 else ''))
 
     def update(self, cycle: Cycle) -> None:
         if not self._ends:
