@@ -34,6 +34,14 @@ def test_round_trip_through_pointcloud2() -> None:
     np.testing.assert_array_equal(back.times, bead.times)  # float64: exact
 
 
+def test_times_go_on_the_clock_of_the_stamps() -> None:
+    # In real time ur_sim's stamps count from the system clock: a deposit's t must be comparable with them.
+    bead = _bead(5)
+    origin = 1_795_000_000.25  # [s]
+    back = from_cloud(to_cloud(bead, 'base', Time(sec=1_795_000_010), t_offset=origin))
+    np.testing.assert_allclose(back.times - origin, bead.times, atol=1e-6)  # float64 near 1.8e9 s: 0.24 us
+
+
 def test_empty_bead_round_trips() -> None:
     back = from_cloud(to_cloud(Bead.empty(), 'base', Time()))
     assert len(back) == 0 and back.points.shape == (0, 3)

@@ -91,7 +91,7 @@ def test_bead_is_laid_on_the_glass_where_the_nozzle_points() -> None:
         # control cycle of the answer (io_states of that cycle shows it too: both read the same IO). The stamp
         # is the cycle's start; the simulated time read by the test may fall within that cycle's step.
         first = beads.items[0][0].header.stamp
-        seen_on = first.sec + first.nanosec * 1e-9
+        seen_on = h.sim.clock.sim_time(first)  # in real time the stamps count from the system clock
         assert before_on - dt <= seen_on <= answered_on + dt + 1e-9
         rec = h.record()
         handle = h.send(h.goal([point(q, 0.5 + 0.3 * k) for k, q in enumerate(line)]))
@@ -102,13 +102,16 @@ def test_bead_is_laid_on_the_glass_where_the_nozzle_points() -> None:
         rec = h.stop_recording()
         bead = from_cloud(beads.last)
         assert beads.last.header.frame_id == 'base'
+        # The deposits' times are on the stamps' clock; as simulated time, to about 0.24 us (float64 near 1.8e9 s).
+        times = bead.times - h.sim.clock.origin_ns * 1e-9
+        eps = 1e-6
 
         # Material reaches the glass only after the on delay (from the cycle the output was seen on) ...
         # (the bead starts at the tip's place in the last cycle before the valve opened).
-        assert seen_on + P.on_delay - dt - 1e-9 <= bead.times[0] <= seen_on + P.on_delay + 1e-9
+        assert seen_on + P.on_delay - dt - eps <= times[0] <= seen_on + P.on_delay + eps
         # ... and keeps coming after the off delay, until the flow has died away.
-        assert bead.times[-1] >= before_off + P.off_delay
-        assert bead.times[-1] <= t_idle
+        assert times[-1] >= before_off + P.off_delay
+        assert times[-1] <= t_idle
 
         # Every point lies on the glass (the analytic surface our mesh was made from) ...
         pts = world(bead.points)
@@ -116,9 +119,9 @@ def test_bead_is_laid_on_the_glass_where_the_nozzle_points() -> None:
         assert np.max(np.linalg.norm(pts - foot, axis=1)) < 1e-3
         # ... where the nozzle axis met it: on the tip's axis line at the point's time.
         t_js, q_js, _ = rec.arrays()
-        moving = (bead.times >= t_js[0]) & (bead.times <= t_js[-1])
+        moving = (times >= t_js[0]) & (times <= t_js[-1])
         assert moving.sum() > 100
-        for p, t in zip(pts[moving][::10], bead.times[moving][::10]):
+        for p, t in zip(pts[moving][::10], times[moving][::10]):
             q = np.array([np.interp(t, t_js, q_js[:, j]) for j in range(6)])
             tip = kin.fk(q)
             axis = tip[:3, :3] @ np.array([0.0, 1.0, 0.0])
@@ -132,18 +135,18 @@ def test_bead_is_laid_on_the_glass_where_the_nozzle_points() -> None:
         assert np.all(bead.widths > 0.0) and np.all(bead.widths < 0.05)
         # Where the tip moved with the flow steady, the section is flow / speed over the glass.
         ds = np.linalg.norm(pts[20:] - pts[:-20], axis=1)
-        speed = ds / np.maximum(bead.times[20:] - bead.times[:-20], 1e-9)
+        speed = ds / np.maximum(times[20:] - times[:-20], 1e-9)
         mid = slice(10, len(speed) + 10)
         arc = np.r_[0.0, np.cumsum(np.linalg.norm(np.diff(pts, axis=0), axis=1))][mid]
         # Away from the blobs the tip piles up where it stands at the start and the end.
-        steady = (bead.times[mid] > seen_on + P.on_delay + 5 * P.time_constant) & (speed > 0.05) & \
+        steady = (times[mid] > seen_on + P.on_delay + 5 * P.time_constant) & (speed > 0.05) & \
             (arc > 0.03) & (arc < arc[-1] - 0.03)
         assert steady.sum() > 50
         expected, _ = section(P.rate / speed[steady])
         np.testing.assert_allclose(bead.widths[mid][steady], expected, rtol=0.1)
         print(f'bead: {len(bead)} points, {bead.length():.3f} m, widths {bead.widths.min() * 1e3:.2f}-'
               f'{bead.widths.max() * 1e3:.2f} mm, steady {np.median(bead.widths[mid][steady]) * 1e3:.2f} mm at '
-              f'{np.median(speed[steady]):.3f} m/s; times {bead.times[0]:.3f}-{bead.times[-1]:.3f} s; on seen '
+              f'{np.median(speed[steady]):.3f} m/s; times {times[0]:.3f}-{times[-1]:.3f} s; on seen '
               f'{seen_on:.3f} s, off seen {seen_off:.3f} s')
 
         # A render of the simulated model with the bead drawn shows it.

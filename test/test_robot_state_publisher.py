@@ -130,7 +130,7 @@ def move_and_record(h, rec: TfRecorder, target, duration: float, count: int) -> 
     handle = h.send(h.goal([point(target, duration, np.zeros(6))]))
     assert handle.accepted
     # Counted by stamp, not by arrival: the listeners' threads may still be delivering older /tf messages.
-    accepted_ns = round(h.sim.sim.time * 1e9)
+    accepted_ns = h.sim.clock.origin_ns + round(h.sim.sim.time * 1e9)  # in real time on the system clock
 
     wait_for(lambda: sum(s > accepted_ns for s in rec.complete()) >= count,
              what=f'{count} /tf messages of the arm joints, with their joint states and tool0_controller, after the '

@@ -138,7 +138,7 @@ class SimulatedDispenser(Component):
             if n == self._published_len and not force:
                 return
             bead = self._track.bead()
-        self._pub.publish(to_cloud(bead, self.frame_id, cycle.stamp))
+        self._pub.publish(to_cloud(bead, self.frame_id, cycle.stamp, self.host.clock.origin_ns * 1e-9))
         self._published_len = n
         self._next_sim = cycle.t + PUBLISH_PERIOD
         self._next_wall = time.monotonic() + MIN_WALL_PERIOD

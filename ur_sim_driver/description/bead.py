@@ -82,14 +82,15 @@ class Bead:
         return float(np.linalg.norm(np.diff(self.points, axis=0), axis=1).sum()) if len(self) > 1 else 0.0
 
 
-def to_cloud(bead: Bead, frame_id: str, stamp: Time) -> PointCloud2:
-    """The bead as a PointCloud2 (fields x, y, z, width, height float32 [m], t float64 [s])."""
+def to_cloud(bead: Bead, frame_id: str, stamp: Time, t_offset: float = 0.0) -> PointCloud2:
+    """The bead as a PointCloud2 (fields x, y, z, width, height float32 [m], t float64 [s]); `t_offset` [s] is added to
+    every time (the stamps' origin: t is then on the clock of the stamps)."""
     from sensor_msgs.msg import PointCloud2, PointField
 
     rows = np.empty(len(bead), dtype=CLOUD_DTYPE)
     for axis, name in enumerate('xyz'):
         rows[name] = bead.points[:, axis]
-    rows['width'], rows['height'], rows['t'] = bead.widths, bead.heights, bead.times
+    rows['width'], rows['height'], rows['t'] = bead.widths, bead.heights, bead.times + t_offset
     msg = PointCloud2()
     msg.header.frame_id = frame_id
     msg.header.stamp = stamp
