@@ -13,6 +13,7 @@ from control_msgs.srv import QueryTrajectoryState
 from rosgraph_msgs.msg import Clock
 from sensor_msgs.msg import JointState
 from sim_harness import point, running_sim, wait_for, wait_still
+from tf2_msgs.msg import TFMessage
 
 from ur_sim_driver.motion import result_codes as rc
 from ur_sim_driver.motion.conversions import RobotClock
@@ -44,14 +45,17 @@ def test_in_real_time_the_stamps_are_the_system_clock():
     # machine only makes the stamps later, never outside these bounds.
     before = time.time_ns()
     with running_sim(real_time_factor=1.0) as h:
-        states, clocks = [], []
+        states, clocks, tcp = [], [], []
         h.listen(JointState, '/joint_states', lambda m: states.append(ns(m.header.stamp)))
         h.listen(Clock, '/clock', lambda m: clocks.append(ns(m.clock)))
-        wait_for(lambda: len(states) >= 50 and len(clocks) >= 50 and clocks[-1] > states[0] and states[-1] > clocks[0],
-                 what='joint states and /clock messages of the same cycles')
+        h.listen(TFMessage, '/tf', lambda m: tcp.extend(ns(t.header.stamp) for t in m.transforms
+                                                        if t.child_frame_id == 'tool0_controller'))
+        wait_for(lambda: len(states) >= 50 and len(clocks) >= 50 and clocks[-1] > states[0] and states[-1] > clocks[0]
+                 and tcp, what='joint states, /clock messages of the same cycles and the TCP on /tf')
         received = time.time_ns()
         period = round(h.sim.sim.control_dt * 1e9)
         assert before <= states[0] and states[-1] <= received + period
+        assert before <= tcp[0] and tcp[-1] <= received + period  # what a tf lookup at the client's now needs
         assert np.all(np.diff(states) > 0)
         # /clock carries the same time as the stamps (use_sim_time clients see the same clock).
         common = set(states) & set(clocks)
