@@ -407,10 +407,19 @@ class SimHarness:
         return stop
 
     def rosout(self) -> list[tuple[str, str]]:
-        """(logger name, text) of every /rosout line from the first call on; the list grows as lines arrive."""
+        """(logger name, text) of every /rosout line from the first call on; the list grows as lines arrive.
+
+        /rosout keeps each line for late subscribers (transient local, 10 s): subscribed so, a line logged before
+        this listener matched a process's writer still arrives, and the lines from before the call are told apart
+        by their stamps (the system clock, as rcutils stamps them)."""
         if self._rosout is None:
             self._rosout = []
-            self.listen(Log, '/rosout', lambda msg: self._rosout.append((msg.name, msg.msg)))
+            since = time.time_ns()
+
+            def keep(msg: Log) -> None:
+                if msg.stamp.sec * 1_000_000_000 + msg.stamp.nanosec >= since:
+                    self._rosout.append((msg.name, msg.msg))
+            self.listen(Log, '/rosout', keep, latched=True)
         return self._rosout
 
     def close(self) -> None:
