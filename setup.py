@@ -27,7 +27,7 @@ setup(
     tests_require=['pytest'],
     entry_points={
         'console_scripts': [
-            'ur_sim = ur_sim_driver.ros.node:main',
+            'ur_sim = ur_sim_driver.ros.main:main',
             'ur_glue_planner = ur_glue_planner.parts.command:main',
             'ur_glue_studio = ur_glue_planner.studio.node:main',
         ],

@@ -1,4 +1,4 @@
-"""What ur_sim's executors buy, in CPU: its busy nodes on executors of their own (``ros/node.py`` ``make_executors``:
+"""What ur_sim's executors buy, in CPU: its busy nodes on executors of their own (``ros/main.py`` ``make_executors``:
 ur_sim's own node, with the pace topic, on rclpy's EventsExecutor; the trajectory_until_node on a
 MultiThreadedExecutor of its own) against one executor for every node.
 
@@ -19,7 +19,9 @@ from rclpy.node import Node
 from rclpy.parameter import Parameter
 from rosgraph_msgs.msg import Clock
 
-from ur_sim_driver.ros.node import PACE_QOS, UrSimNode, make_executors
+from ur_sim_driver.ros.main import make_executors
+from ur_sim_driver.ros.node import UrSimNode
+from ur_sim_driver.ros.pace_gate import PACE_QOS
 from ur_sim_driver.spin_thread import SpinThread
 
 PACE_MESSAGES = 400

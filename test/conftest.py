@@ -53,7 +53,7 @@ def pytest_configure(config) -> None:
     os.environ['ROS_LOG_DIR'] = str(log_dir)
     os.environ.setdefault('MUJOCO_GL', 'egl')
     # As ur_sim's main() does: the in-process simulation thread needs the GIL handed over often.
-    from ur_sim_driver.ros.node import GIL_SWITCH_INTERVAL
+    from ur_sim_driver.ros.main import GIL_SWITCH_INTERVAL
     sys.setswitchinterval(GIL_SWITCH_INTERVAL)
     # Helpers shared by the suites live beside this file.
     sys.path.insert(0, str(Path(__file__).resolve().parent))

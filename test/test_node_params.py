@@ -117,7 +117,7 @@ def test_real_time_loop_runs_under_sched_fifo_where_permitted(rtf, priority):
                                                   "the driver was configured for type 'ur20'")])
 def test_console_script_exits_nonzero_with_message_on_bad_parameter(args, message):
     ros_args = [a for arg in args for a in ('-p', arg)]
-    proc = subprocess.run([sys.executable, '-m', 'ur_sim_driver.ros.node', '--ros-args', *ros_args],
+    proc = subprocess.run([sys.executable, '-m', 'ur_sim_driver.ros.main', '--ros-args', *ros_args],
                           capture_output=True, text=True, timeout=60)
     assert proc.returncode == 2
     assert message in proc.stderr

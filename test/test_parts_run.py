@@ -68,7 +68,7 @@ def test_a_paced_simulation_waits_for_its_client() -> None:
         pace = h.client.create_publisher(Clock, '/pace', latched)
         # Until the client's first word the simulation runs at real time's pace; a hold in the past stops it.
         pace.publish(Clock(clock=_time(0.0)))
-        wait_for(lambda: h.sim.paced_until == 0.0, what='the hold at ur_sim')
+        wait_for(lambda: h.sim.pace.paced_until == 0.0, what='the hold at ur_sim')
         stopped = h.sim.sim.time
         for hold in (stopped + 0.5, stopped + 1.25):
             pace.publish(Clock(clock=_time(hold)))

@@ -56,7 +56,7 @@ class SimConfig:
     real_time_factor: float = 1.0
     # In step with a client: the loop steps only while the simulated time is at most pace_lag [s] past the time the
     # client last published on pace_topic (rosgraph_msgs/Clock), at real time's pace before its first message; ''
-    # runs free (ros/node.py, _wait_for_pace).
+    # runs free (ros/pace_gate.py).
     pace_topic: str = ''
     pace_lag: float = 0.02
     thread_priority: int = 50  # SCHED_FIFO priority of the real-time loop, as ros2_control_node's; 0: normal

@@ -7,25 +7,19 @@ cycles; the active joint controller (a trajectory or forward command controller)
 every cycle. The trajectory controllers' action servers and joint_trajectory subscriptions run in a process of
 their own (``trajectory_gateway.py``, started here), so that receiving a large trajectory never holds up the
 loop; a receiving thread hands its trajectories and cancels to their controller under one lock, and the
-controllers send back outcomes and feedback. All times on the interfaces are simulated time, which the node
-publishes on /clock.
+controllers send back outcomes and feedback. Every stamp is simulated time on the stamps' clock
+(``conversions.RobotClock``: in real time counted from the system clock at start), which the node publishes on
+/clock. The executable (executors, signals) is ``main.py``; a client in step with the loop, ``pace_gate.py``.
 """
 from __future__ import annotations
 
-import gc
 import os
-import signal
-import sys
 import tempfile
 import threading
 import time
 from pathlib import Path
 
-import rclpy
-from rclpy.executors import Executor, ExternalShutdownException, MultiThreadedExecutor
 from rclpy.node import Node
-from rclpy.qos import DurabilityPolicy, QoSProfile, ReliabilityPolicy
-from rclpy.signals import SignalHandlerOptions
 from rosgraph_msgs.msg import Clock
 
 from ur_sim_driver.controllers import startup
@@ -49,7 +43,6 @@ from ur_sim_driver.controllers.speed_scaling_state_broadcaster import SpeedScali
 from ur_sim_driver.controllers.tcp_pose_broadcaster import TcpPoseBroadcaster
 from ur_sim_driver.controllers.tool_contact import ToolContactController
 from ur_sim_driver.controllers.ur_configuration import UrConfigurationController
-from ur_sim_driver.errors import UrSimError
 from ur_sim_driver.gateway.gateway_link import Admission, Admit, Dropped, GatewayConfig, GatewayLink, Received, Start
 from ur_sim_driver.gateway.memory import use_mmap_for_large_blocks
 from ur_sim_driver.motion import conversions as conv
@@ -69,20 +62,15 @@ from ur_sim_driver.robot.sim_config import PARAMETER_NAMES, SimConfig, sim_confi
 from ur_sim_driver.robot.simulator import BRAKE_CAPABILITY, Simulator
 from ur_sim_driver.robot.speed_scaling import RobotSpeedScaling
 from ur_sim_driver.ros.dashboard import DashboardClient
+from ur_sim_driver.ros.pace_gate import PaceGate
 from ur_sim_driver.ros.robot_state_helper import RobotStateHelper
 from ur_sim_driver.ros.robot_state_publisher import RobotStatePublisher
 from ur_sim_driver.ros.sim_io import SimulatedInputs
 from ur_sim_driver.ros.sim_wrench import AppliedWrenches
 from ur_sim_driver.ros.trajectory_until import TrajectoryUntilNode
 from ur_sim_driver.ros.urscript_interface import URScriptInterface
-from ur_sim_driver.spin_thread import SpinThread, events_executor
 from ur_sim_driver.urscript.runner import ScriptRunner
 
-GIL_SWITCH_INTERVAL = 2e-4  # [s]
-# Component nodes woken often enough to spin on an executor of their own (make_executors).
-BUSY_NODES = ('trajectory_until_node',)
-# pace_topic: the client's last word counts, also if it was said before ur_sim subscribed (a client may start first)
-PACE_QOS = QoSProfile(depth=1, durability=DurabilityPolicy.TRANSIENT_LOCAL, reliability=ReliabilityPolicy.RELIABLE)
 VIEWER_FRAME_PERIOD = 1.0 / 30.0  # [s] of wall time
 _CATCH_UP_LIMIT = 0.1  # [s] of wall time the real-time loop may fall behind before it stops catching up
 UNSCALED_CONTROLLER = 'joint_trajectory_controller'
@@ -130,18 +118,15 @@ class UrSimNode(Node):
         initial = startup.initial_joint_controller(self.cfg)  # checked before the gateway process starts
         startup.check_start(self.cfg)
         self._pub_clock = self.create_publisher(Clock, '/clock', 10)
-        # In step with a client (pace_topic): the robot time [s] it last published, None before its first message.
-        self._paced: float | None = None
-        self._pace_changed = threading.Condition()
-        if self.cfg.pace_topic:
-            self.create_subscription(Clock, self.cfg.pace_topic, self._on_pace, PACE_QOS)
+        # Stamps: in real time they read as the system clock, as the driver's do (conversions.RobotClock).
+        real_time = self.cfg.real_time_factor > 0.0 and not self.cfg.pace_topic
+        self.clock = conv.RobotClock(time.time_ns() if real_time else 0)
+        # In step with a client: the loop waits for the robot time it last handled.
+        self.pace = PaceGate(self, self.cfg.pace_topic, self.clock, self.cfg.pace_lag) if self.cfg.pace_topic else None
 
         params = self.sim.params
         trajectory_names = (ctrl,) if ctrl == UNSCALED_CONTROLLER else (ctrl, UNSCALED_CONTROLLER)
         self._trajectory: dict[str, JointTrajectoryControllerComponent] = {}
-        # Stamps: in real time they read as the system clock, as the driver's do (conversions.RobotClock).
-        real_time = self.cfg.real_time_factor > 0.0 and not self.cfg.pace_topic
-        self.clock = conv.RobotClock(time.time_ns() if real_time else 0)
         self.gateway = GatewayLink(GatewayConfig(
             controllers=(*trajectory_names, PassthroughTrajectoryController.name),
             passthrough=(PassthroughTrajectoryController.name,), namespace=self.cfg.namespace, joints=self.joints,
@@ -294,8 +279,8 @@ class UrSimNode(Node):
             self._real_time_priority()
         try:
             while not self._stop.is_set():
-                if self.cfg.pace_topic:
-                    self._wait_for_pace()
+                if self.pace is not None:
+                    self.pace.wait(self.sim.time - dt, dt, self._stop)
                 self.step_once()
                 if viewer is not None and time.perf_counter() >= next_frame:
                     with self._lock:
@@ -309,7 +294,7 @@ class UrSimNode(Node):
                     elif delay < -_CATCH_UP_LIMIT and self.sim.time > starting:
                         next_wall = time.perf_counter()
                 # As fast as possible the loop never yields on its own: the executor's threads get the GIL within
-                # the switch interval (GIL_SWITCH_INTERVAL) when they ask for it. A sleep(0) every 8 cycles cost
+                # the switch interval (main.GIL_SWITCH_INTERVAL) when they ask for it. A sleep(0) every 8 cycles cost
                 # 10 to 20 % of the rate (each one a system call that may sleep for the timer slack).
         except Exception as exc:
             if self._stop.is_set() or not self.context.ok():
@@ -319,31 +304,6 @@ class UrSimNode(Node):
         finally:
             if viewer is not None:
                 viewer.close()
-
-    @property
-    def paced_until(self) -> float | None:
-        """pace_topic: the robot time [s] the client last published (None before its first message or unpaced)."""
-        with self._pace_changed:
-            return self._paced
-
-    def _on_pace(self, msg: Clock) -> None:
-        with self._pace_changed:
-            t = self.clock.sim_time(msg.clock)
-            self._paced = t  # the newest, even if earlier: a client may hold the simulation back (a switch ahead)
-            self._pace_changed.notify_all()
-
-    def _wait_for_pace(self) -> None:
-        """Hold the loop while the last cycle published is more than pace_lag past the time the client last
-        published: the client (a planner switching IO on the trajectory's clock) sees the cycles it needs, and what
-        it sends in reply arrives within pace_lag of robot time however loaded the machine is. Until the client's
-        first message the loop runs at real time's pace (its clients find it, and it burns no core meanwhile)."""
-        lag, dt = self.cfg.pace_lag, self.sim.control_dt
-        with self._pace_changed:
-            if self._paced is None:
-                self._pace_changed.wait(dt)  # a message ends the wait early
-                return
-            while not self._stop.is_set() and self.sim.time - dt > self._paced + lag + 1e-9:
-                self._pace_changed.wait(0.05)  # woken by the client's next message; the timeout sees a stop
 
     def _real_time_priority(self) -> None:
         """Run this (the loop's) thread under SCHED_FIFO at `thread_priority`, as ros2_control_node runs its
@@ -493,76 +453,3 @@ class UrSimNode(Node):
         self.controller_manager.destroy()
         super().destroy_node()
         self._robot_files.cleanup()
-
-
-def make_executors(node: UrSimNode, split: bool = True) -> list[Executor]:
-    """The executors spinning ur_sim's nodes. rclpy's MultiThreadedExecutor walks every entity of its nodes at each
-    wake (about 2 ms for ur_sim's 200 services, subscriptions and event handlers), and two nodes wake it about 40
-    times a second of a glue run each: with `split` they spin apart (``python -m bench executors``):
-
-    * this node, whose only entities besides its parameter services are the pace topic's subscription (none of its
-      callbacks waits), on rclpy's EventsExecutor, which handles an event without walking anything;
-    * the trajectory_until_node (its client of the trajectory action gets every goal's feedback) on a
-      MultiThreadedExecutor of its own: its goal callbacks wait for that client's answers;
-    * the rest on a MultiThreadedExecutor: service callbacks wait for the simulation's cycles.
-    """
-    executors: list[Executor] = [MultiThreadedExecutor(num_threads=4, context=node.context)]
-    if not split:
-        for n in node.nodes():
-            executors[0].add_node(n)
-        return executors
-    own, busy = events_executor(node.context), MultiThreadedExecutor(num_threads=4, context=node.context)
-    executors += [own, busy]
-    for n in node.nodes():
-        (own if n is node else busy if n.get_name() in BUSY_NODES else executors[0]).add_node(n)
-    return executors
-
-
-def main(argv: list[str] | None = None) -> int:
-    """Entry point of `ur_sim` (and `ros2 run ur_sim_driver ur_sim`). Exits 0 on SIGINT/SIGTERM, 2 on bad parameters."""
-    # The simulation thread gives up the GIL in every MuJoCo and rcl call; with the default 5 ms switch
-    # interval each hand-back can stall it behind an executor thread, which caps the loop far below 500 Hz.
-    sys.setswitchinterval(GIL_SWITCH_INTERVAL)
-    # Our own signal handling: stop the simulation thread first, then shut the context down, so that no
-    # publish races the context's destruction.
-    rclpy.init(args=argv, signal_handler_options=SignalHandlerOptions.NO)
-    stop = threading.Event()
-    for sig in (signal.SIGINT, signal.SIGTERM):
-        signal.signal(sig, lambda *_: stop.set())
-    node = None
-    executors: list[Executor] = []
-    spinners: list[SpinThread] = []
-    code = 0
-    try:
-        node = UrSimNode()
-        executors = make_executors(node)
-        # Everything built so far (models, nodes, messages) lives until exit: out of the collector's sight, its
-        # full collections take microseconds instead of milliseconds that the loop thread would wait out.
-        gc.freeze()
-        # The executors wait in threads of their own, woken by work or once a second; this thread waits for the
-        # signal. (Waking every 0.1 s to look at `stop` rebuilt the wait set of some 150 entities each time: about
-        # 3 ms of interpreter time, which the loop thread shared.)
-        spinners = [SpinThread(e, f'ur_sim_executor_{i}').start() for i, e in enumerate(executors)]
-        while not stop.wait(0.5) and rclpy.ok() and all(s.running for s in spinners):
-            pass
-    except (KeyboardInterrupt, ExternalShutdownException):
-        pass
-    except UrSimError as exc:
-        print(f'ur_sim: {exc}', file=sys.stderr)
-        code = 2
-    finally:
-        if node is not None:
-            node.shutdown()
-        for spinner in spinners:
-            spinner.stop(timeout=2.0)
-        if not spinners:
-            for executor in executors:
-                executor.shutdown(timeout_sec=2.0)
-        if node is not None:
-            node.destroy_node()
-        rclpy.try_shutdown()
-    return code
-
-
-if __name__ == '__main__':
-    sys.exit(main())
