@@ -103,7 +103,6 @@ def start_bag(ur: URClient, plan: GluePlan, bag_dir: str | Path | None,
         return None
 
 
-
 def _wait_executing(goal) -> None:
     """Until the server reports `goal` executing: ur_sim's gateway hands a goal to the controller before it says so.
     Wall time passes, robot time does not (ur_sim is held); a poll, as the status has no event to wait on here."""
@@ -112,6 +111,7 @@ def _wait_executing(goal) -> None:
         if time.monotonic() > deadline:
             raise ClientError(f'the bead goal was not reported executing within {EXECUTING_TIMEOUT:.0f} s')
         time.sleep(0.001)
+
 
 def execute(ur: URClient, plan: GluePlan, stop: threading.Event, log: Callable[[str], None] = _print,
             on_progress: Progress | None = None, gun: DispenserIO | None = None,
