@@ -170,7 +170,7 @@ class TrajectoryGateway:
 
     def _on_sim_time(self, cmd: CommandArrays) -> CommandArrays:
         """`cmd` with its start stamp as the simulation counts time (the stamps' origin taken off)."""
-        if cmd.header_stamp == 0.0 or not self.cfg.clock.origin_ns:
+        if not self.cfg.clock.origin_ns:
             return cmd
         return replace(cmd, header_stamp=self.cfg.clock.sim_seconds(cmd.header_stamp))
 

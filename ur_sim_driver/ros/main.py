@@ -24,8 +24,9 @@ def make_executors(node: UrSimNode, split: bool = True) -> list[Executor]:
     wake (about 2 ms for ur_sim's 200 services, subscriptions and event handlers), and two nodes wake it about 40
     times a second of a glue run each: with `split` they spin apart (``python -m bench executors``):
 
-    * this node, whose only entities besides its parameter services are the pace topic's subscription (none of its
-      callbacks waits), on rclpy's EventsExecutor, which handles an event without walking anything;
+    * ur_sim's own node (`node`), whose only entities besides its parameter services are the pace topic's
+      subscription (none of its callbacks waits), on rclpy's EventsExecutor, which handles an event without walking
+      anything;
     * the trajectory_until_node (its client of the trajectory action gets every goal's feedback) on a
       MultiThreadedExecutor of its own: its goal callbacks wait for that client's answers;
     * the rest on a MultiThreadedExecutor: service callbacks wait for the simulation's cycles.
