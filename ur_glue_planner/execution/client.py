@@ -203,6 +203,7 @@ class URClient:
         self._errors: list[tuple[float, str]] = []
         self._urdf: str | None = None
         self._recorders: list[JointStateRecorder] = []
+        self._listeners: list[Callable[[JointStateSample], None]] = []
         #: (wall time [s] from sending to the answer, number of points) of each goal sent, oldest first.
         self.goal_answers: list[tuple[float, int]] = []
         self._history: deque[tuple[float, float]] = deque(maxlen=100)  # (wall, stamp) of recent joint states
@@ -256,6 +257,8 @@ class URClient:
                 self._history.append((wall, sample.t))
         for recorder in list(self._recorders):
             recorder.samples.append(sample)
+        for listener in list(self._listeners):
+            listener(sample)
 
     def _on_log(self, msg: Log) -> None:
         if msg.level >= Log.ERROR:
@@ -266,6 +269,12 @@ class URClient:
         """The newest joint state received."""
         with self._state_lock:
             return self._latest
+
+    def on_joint_state(self, listener: Callable[[JointStateSample], None]) -> Callable[[], None]:
+        """Call `listener` with every joint state from now on, in the spinning thread (one subscription serves every
+        reader on the node); returns the function that stops it."""
+        self._listeners.append(listener)
+        return lambda: self._listeners.remove(listener)
 
     def start_recording(self, rate: float = 50.0, t0: float | None = None) -> JointStateRecorder:
         """Record joint states from now on, resampled at `rate` [Hz] of message time (seed 2: 50 Hz).

@@ -22,7 +22,6 @@ from control_msgs.msg import JointTrajectoryControllerState
 from rclpy.node import Node
 from rclpy.qos import DurabilityPolicy, QoSProfile, ReliabilityPolicy
 from rosgraph_msgs.msg import Clock
-from sensor_msgs.msg import JointState
 from std_msgs.msg import Float64
 from ur_msgs.msg import IOStates
 from ur_msgs.srv import SetIO
@@ -71,13 +70,16 @@ class DispenserIO:
             `robot_scaling`).
         robot_scaling: Topic of the robot's speed scaling in percent (std_msgs/Float64) that the controller advances
             by, or None: the controller_state's own factor.
+        pace_topic: Keep a ur_sim started with this pace_topic in step with the client, or None. Paced, the gun
+            needs the robot's time while no goal is armed: feed :meth:`robot_time` every joint state's stamp (from
+            the client's own subscription, :meth:`URClient.on_joint_state`: one subscription serves both).
     The controller's period is taken from the stamps of consecutive state messages: an event is due half a
     period early, so that the call lands in the cycle nearest to its time (within half a period: 1 ms at
     500 Hz, 4 ms at 125 Hz, plus the service's delivery).
     """
 
     def __init__(self, node: Node, controller_state: str, robot_scaling: str | None = None,
-                 pace_topic: str | None = None, joint_states: str = '/joint_states') -> None:
+                 pace_topic: str | None = None) -> None:
         self.node = node
         self._robot_factor: float | None = None  # [0, 1] the latest robot speed scaling, when that is the clock's
         self.client = node.create_client(SetIO, SET_IO)
@@ -98,9 +100,6 @@ class DispenserIO:
         self._last_joint_state: float | None = None
         self._pace_sent: float | None = None  # the last hold time published
         self._holds: list[float] = []  # robot times [s] a paced ur_sim must not pass (hold())
-        if pace_topic:  # the robot's time while no goal is armed: joint states come every cycle, controller states
-            # only while the controller is active
-            node.create_subscription(JointState, joint_states, self._on_joint_state, QoSProfile(depth=20))
         self._uses_robot_scaling = robot_scaling is not None
         if robot_scaling is not None:
             node.create_subscription(Float64, robot_scaling, self._on_robot_scaling, QoSProfile(depth=20))
@@ -167,8 +166,10 @@ class DispenserIO:
             future.add_done_callback(lambda _: self._publish_pace())
         self._publish_pace()
 
-    def _on_joint_state(self, msg: JointState) -> None:
-        self._last_joint_state = msg.header.stamp.sec + msg.header.stamp.nanosec * 1e-9
+    def robot_time(self, stamp: float) -> None:
+        """The robot's time [s] of a joint state: paced, it is the newest time while no goal is armed (joint states
+        come every cycle, controller states only while the controller is active)."""
+        self._last_joint_state = stamp
         if self._clock is None:
             self._publish_pace()
 
@@ -237,6 +238,7 @@ class DispenserIO:
 
 def dispenser_for(node: Node, prefix: str, controller: str, pace_topic: str | None = None) -> DispenserIO:
     """The gun switched on the clock of trajectory controller `controller` under namespace `prefix` ('' or '/ns');
-    `pace_topic`: keep a ur_sim started with that pace_topic in step with it."""
+    `pace_topic`: keep a ur_sim started with that pace_topic in step with it (feed it
+    :meth:`DispenserIO.robot_time`)."""
     robot = None if controller == PLAIN_CONTROLLER else f'{prefix}/speed_scaling_state_broadcaster/speed_scaling'
-    return DispenserIO(node, f'{prefix}/{controller}/controller_state', robot, pace_topic, f'{prefix}/joint_states')
+    return DispenserIO(node, f'{prefix}/{controller}/controller_state', robot, pace_topic)
