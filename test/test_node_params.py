@@ -99,7 +99,7 @@ def test_real_time_loop_runs_under_sched_fifo_where_permitted(rtf, priority):
         try:
             t0 = node.sim.time
             wait_for(lambda: node.sim.time > t0 + 0.05, what='the simulation loop running')
-            tid = node._thread.native_id
+            tid = node.loop.native_id
             policy, param = os.sched_getscheduler(tid), os.sched_getparam(tid)
         finally:
             node.shutdown()

@@ -1,8 +1,8 @@
 """The `ur_sim` node: a MuJoCo-simulated UR arm behind the UR ROS 2 driver's interfaces.
 
-Threads: the simulation loop runs in its own thread (paced to the wall clock, or as fast as possible) and
-publishes every control cycle. The driver's controllers are components (``controllers/``), each its own node,
-held by the controller manager (``controllers/controller_manager_node.py``), which switches them between two
+Threads: the simulation loop runs in its own thread (``sim_loop.py``: paced to the wall clock, or as fast as
+possible) and publishes every control cycle. The driver's controllers are components (``controllers/``), each its
+own node, held by the controller manager (``controllers/controller_manager_node.py``), which switches them between two
 cycles; the active joint controller (a trajectory or forward command controller) gives the robot its reference
 every cycle. The trajectory controllers' action servers and joint_trajectory subscriptions run in a process of
 their own (``trajectory_gateway.py``, started here), so that receiving a large trajectory never holds up the
@@ -13,7 +13,6 @@ controllers send back outcomes and feedback. Every stamp is simulated time on th
 """
 from __future__ import annotations
 
-import os
 import tempfile
 import threading
 import time
@@ -66,13 +65,12 @@ from ur_sim_driver.ros.pace_gate import PaceGate
 from ur_sim_driver.ros.robot_state_helper import RobotStateHelper
 from ur_sim_driver.ros.robot_state_publisher import RobotStatePublisher
 from ur_sim_driver.ros.sim_io import SimulatedInputs
+from ur_sim_driver.ros.sim_loop import SimLoop
 from ur_sim_driver.ros.sim_wrench import AppliedWrenches
 from ur_sim_driver.ros.trajectory_until import TrajectoryUntilNode
 from ur_sim_driver.ros.urscript_interface import URScriptInterface
 from ur_sim_driver.urscript.runner import ScriptRunner
 
-VIEWER_FRAME_PERIOD = 1.0 / 30.0  # [s] of wall time
-_CATCH_UP_LIMIT = 0.1  # [s] of wall time the real-time loop may fall behind before it stops catching up
 UNSCALED_CONTROLLER = 'joint_trajectory_controller'
 
 
@@ -103,7 +101,6 @@ class UrSimNode(Node):
         # The robot's own speed scaling, whichever controller commands it.
         self.scaling = RobotSpeedScaling(self.sim.params.v_max, self.sim.a_max)
         self._lock = threading.Lock()
-        self._stop = threading.Event()
         self._cycle = 0
         # Trajectories, cancels and dropped topic messages handled from the gateway, in order (read by tests and
         # scripts that step the simulation themselves: a command has reached its controller when this counts it).
@@ -198,9 +195,10 @@ class UrSimNode(Node):
             self._open_port('real-time interface', 'realtime.port', lambda: PrimaryPort(
                 cfg.realtime_host, cfg.realtime_port, self.host, REALTIME, log=self.get_logger().info)))
             if port is not None]
-        self._thread = threading.Thread(target=self._run, name='ur_sim_loop', daemon=True)
+        self.loop = SimLoop(self.step_once, self.sim, self.cfg, self.clock, self.pace, self._lock, self.context,
+                            self.get_logger())
         if start:
-            self._thread.start()
+            self.loop.start()
         mode = 'as fast as possible' if self.cfg.real_time_factor == 0 else f'RTF {self.cfg.real_time_factor}'
         self.get_logger().info(
             f'{self.cfg.ur_type} simulated at {self.sim.control_rate:.0f} Hz control '
@@ -250,76 +248,7 @@ class UrSimNode(Node):
         if isinstance(message, Start) and message.token is not None:
             self.gateway.send(Received(message.token))  # the goal is with its controller (or already ended)
 
-    # ---- simulation loop (own thread) ------------------------------------------------------------
-    def _open_viewer(self):
-        """MuJoCo's passive viewer where a display exists (`viewer: true`), else None with a warning."""
-        if not self.cfg.viewer:
-            return None
-        if not (os.environ.get('DISPLAY') or os.environ.get('WAYLAND_DISPLAY')):
-            self.get_logger().warning('viewer: true but no display (DISPLAY is unset); running without a viewer')
-            return None
-        try:
-            import mujoco.viewer
-            return mujoco.viewer.launch_passive(self.sim.physics.model, self.sim.physics.data)
-        except Exception as exc:  # a broken GL setup must not stop the simulation
-            self.get_logger().warning(f'viewer could not be opened ({exc!r}); running without a viewer')
-            return None
-
-    def _run(self) -> None:
-        viewer = self._open_viewer()
-        next_frame = 0.0
-        dt = self.sim.control_dt
-        rtf = self.cfg.real_time_factor
-        wall_period = dt / rtf if rtf > 0 else 0.0
-        next_wall = time.perf_counter()
-        # Stamped from the wall clock at start (self.clock): the first cycles catch up the time since.
-        starting = (time.time_ns() - self.clock.origin_ns) * 1e-9 if self.clock.origin_ns else 0.0
-        next_wall -= starting
-        if wall_period > 0.0:
-            self._real_time_priority()
-        try:
-            while not self._stop.is_set():
-                if self.pace is not None:
-                    self.pace.wait(self.sim.time - dt, dt, self._stop)
-                self.step_once()
-                if viewer is not None and time.perf_counter() >= next_frame:
-                    with self._lock:
-                        viewer.sync()
-                    next_frame = time.perf_counter() + VIEWER_FRAME_PERIOD
-                if wall_period > 0.0:
-                    next_wall += wall_period
-                    delay = next_wall - time.perf_counter()
-                    if delay > 0.0:
-                        time.sleep(delay)
-                    elif delay < -_CATCH_UP_LIMIT and self.sim.time > starting:
-                        next_wall = time.perf_counter()
-                # As fast as possible the loop never yields on its own: the executor's threads get the GIL within
-                # the switch interval (main.GIL_SWITCH_INTERVAL) when they ask for it. A sleep(0) every 8 cycles cost
-                # 10 to 20 % of the rate (each one a system call that may sleep for the timer slack).
-        except Exception as exc:
-            if self._stop.is_set() or not self.context.ok():
-                return  # shutting down: publishers may already be gone
-            self.get_logger().fatal(f'simulation loop stopped: {exc!r}')
-            raise
-        finally:
-            if viewer is not None:
-                viewer.close()
-
-    def _real_time_priority(self) -> None:
-        """Run this (the loop's) thread under SCHED_FIFO at `thread_priority`, as ros2_control_node runs its
-        update thread, so that other processes' load does not delay its cycles. Only in real-time mode: as fast
-        as possible, a FIFO thread that never sleeps would starve the rest of the machine."""
-        priority = self.cfg.thread_priority
-        if priority == 0:
-            return
-        try:
-            os.sched_setscheduler(0, os.SCHED_FIFO, os.sched_param(priority))
-        except OSError as exc:  # not permitted (no CAP_SYS_NICE / rtprio limit): run as before, and say so
-            self.get_logger().warning(
-                f'could not run the simulation loop under SCHED_FIFO priority {priority} ({exc.strerror}); it runs '
-                'at normal priority and its period may jitter under load (allow it with an rtprio limit, e.g. in '
-                '/etc/security/limits.conf, or set thread_priority:=0 to silence this)')
-
+    # ---- the control cycle (the loop's thread, sim_loop.py, or a caller stepping it) -----------------------------
     def step_once(self) -> None:
         """One control cycle: pending controller switches, robot state, the active joint controller's reference,
         torques, physics step, safety, then the active components publish."""
@@ -439,9 +368,7 @@ class UrSimNode(Node):
 
     def shutdown(self) -> None:
         """Stop the simulation loop and the controller's interface process, and wait for both."""
-        self._stop.set()
-        if self._thread.is_alive():
-            self._thread.join(timeout=5.0)
+        self.loop.stop()
         for port in (self.dashboard_port, self.rtde_port, *self.primary_ports):
             if port is not None:
                 port.close()
