@@ -6,7 +6,8 @@ import pytest
 from sim_harness import hand_over, running_sim, wait_for, wait_still
 
 from ur_glue_planner.errors import ClientError
-from ur_glue_planner.execution.client import DELIVERY_FACTOR, STAMP_TIE, URClient
+from ur_glue_planner.execution.client import DELIVERY_FACTOR, URClient
+from ur_glue_planner.execution.joint_state_recording import STAMP_TIE
 
 PRESET = dict(ur_type='ur10', namespace='/ur10', controller_name='vel_based_pos_traj_controller',
               initial_positions=[0.0] * 6, base_pose=[0.0, 0.0, 1.0, 0.0, 0.0, 0.0])

@@ -2,8 +2,9 @@
 margin and the result messages."""
 import pytest
 
-from ur_glue_planner.execution.client import DELIVERY_FACTOR, GoalOutcome, delivery_margin
+from ur_glue_planner.execution.client import DELIVERY_FACTOR, delivery_margin
 from ur_glue_planner.execution.run import BEAD_DELIVERY, MESSAGES, describe
+from ur_glue_planner.execution.trajectory_goal import GoalOutcome
 
 
 def bead_delivery(answers, points):

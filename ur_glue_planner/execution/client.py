@@ -17,11 +17,9 @@ import time
 import weakref
 from collections import deque
 from collections.abc import Callable, Sequence
-from dataclasses import dataclass
 
 import numpy as np
 import rclpy
-from action_msgs.msg import GoalStatus
 from control_msgs.action import FollowJointTrajectory
 from control_msgs.msg import JointTolerance
 from rcl_interfaces.msg import Log
@@ -34,138 +32,19 @@ from std_msgs.msg import String
 
 from ur_glue_planner.errors import ClientError
 from ur_glue_planner.execution import ros_conversions as conv
+from ur_glue_planner.execution.joint_state_recording import (
+    JointStateRecorder,
+    JointStateSample,
+    Recording,
+)
+from ur_glue_planner.execution.trajectory_goal import GoalOutcome, TrajectoryGoal, wait_until
 from ur_glue_planner.motion.kinematics import IkResult, Kinematics
 from ur_sim_driver.action_client import ActionClient
 from ur_sim_driver.spin_thread import SpinThread
 
 DEFAULT_CONTROLLER = 'scaled_joint_trajectory_controller'
 IDLE_PACE = 0.002  # [s] rest of the client's spinning thread after a callback while nothing runs or records
-# Two stamps this close [s] are the same time: a stamp is exact to the nanosecond, but as float seconds on the
-# system clock (the real driver's, ur_sim's in real time; about 1.8e9 s) it resolves only about 0.24 us.
-STAMP_TIE = 1e-6
 DELIVERY_FACTOR = 4.0  # x the slowest goal answer seen so far: a loaded machine gets a margin in proportion
-STATUS_NAMES = {GoalStatus.STATUS_SUCCEEDED: 'succeeded', GoalStatus.STATUS_ABORTED: 'aborted',
-                GoalStatus.STATUS_CANCELED: 'canceled'}
-
-
-@dataclass(frozen=True)
-class JointStateSample:
-    """One /joint_states message: stamp t [s], names, q [rad], qd [rad/s], effort [N m] (arrays (n,))."""
-
-    t: float
-    names: tuple[str, ...]
-    q: np.ndarray
-    qd: np.ndarray
-    effort: np.ndarray
-
-
-@dataclass(frozen=True)
-class GoalOutcome:
-    """How a FollowJointTrajectory goal ended: the control_msgs error code and string, and the goal status."""
-
-    error_code: int
-    error_string: str
-    status: str
-
-    @property
-    def succeeded(self) -> bool:
-        return self.status == 'succeeded' and self.error_code == FollowJointTrajectory.Result.SUCCESSFUL
-
-
-@dataclass(frozen=True)
-class Recording:
-    """Joint states sampled at a fixed rate: t (K,) [s] from the first sample, q, qd, effort (K, n)."""
-
-    t: np.ndarray
-    q: np.ndarray
-    qd: np.ndarray
-    effort: np.ndarray
-
-
-def _wait(condition: Callable[[], bool], timeout: float, what: str) -> None:
-    deadline = time.monotonic() + timeout
-    while not condition():
-        if time.monotonic() > deadline:
-            raise ClientError(f'{what} within {timeout:.1f} s')
-        time.sleep(0.001)
-
-
-class JointStateRecorder:
-    """Joint states received while recording, resampled at a fixed rate of message time."""
-
-    def __init__(self, rate: float, t0: float | None = None) -> None:
-        self.rate = rate
-        self.t0 = t0
-        self.samples: list[JointStateSample] = []
-
-    def start(self) -> float:
-        """Time of sample 0 [s]: the given t0, else the first message's stamp."""
-        return self.t0 if self.t0 is not None else self.samples[0].t
-
-    def span(self) -> float:
-        """Message time covered so far from the start [s]."""
-        return self.samples[-1].t - self.start() if self.samples else 0.0
-
-    def raw(self) -> Recording:
-        """Every message received, t relative to the start [s] (messages before the start included, t < 0)."""
-        if not self.samples:
-            raise ClientError('no joint states were received while recording')
-        t0 = self.start()
-        return Recording(np.array([s.t - t0 for s in self.samples]), np.array([s.q for s in self.samples]),
-                         np.array([s.qd for s in self.samples]), np.array([s.effort for s in self.samples]))
-
-    def resample(self, duration: float | None = None) -> Recording:
-        """Samples at start + k / rate, k < duration x rate (the seed's N = tf x rate): for each, the newest
-        message at or before that time."""
-        if not self.samples:
-            raise ClientError('no joint states were received while recording')
-        stamps = np.array([s.t for s in self.samples])
-        t0 = self.start()
-        covered = int(np.floor((stamps[-1] - t0 + STAMP_TIE) * self.rate)) + 1
-        if covered <= 0:
-            raise ClientError(f'no joint states at or after the recording start t0 = {t0:.3f} s '
-                              f'(newest stamp {stamps[-1]:.3f} s)')
-        count = covered if duration is None else min(covered, round(duration * self.rate))
-        grid = np.arange(count) / self.rate
-        picks = np.maximum(np.searchsorted(stamps, t0 + grid + STAMP_TIE, side='right') - 1, 0)
-        chosen = [self.samples[i] for i in picks]
-        return Recording(grid, np.array([s.q for s in chosen]), np.array([s.qd for s in chosen]),
-                         np.array([s.effort for s in chosen]))
-
-
-class TrajectoryGoal:
-    """An accepted goal: latest feedback, cancel() and wait()."""
-
-    def __init__(self, handle, on_feedback: Callable | None) -> None:
-        self._handle = handle
-        self._result_future = handle.get_result_async()
-        self.feedback = None
-        self._on_feedback = on_feedback
-
-    def _feedback(self, msg) -> None:
-        self.feedback = msg.feedback
-        if self._on_feedback is not None:
-            self._on_feedback(msg.feedback)
-
-    @property
-    def done(self) -> bool:
-        return self._result_future.done()
-
-    def cancel(self, timeout: float = 5.0) -> None:
-        """Ask the server to cancel; the robot stops and holds (the result then says canceled)."""
-        future = self._handle.cancel_goal_async()
-        _wait(future.done, timeout, 'no answer to the cancel request')
-
-    @property
-    def executing(self) -> bool:
-        """The server reported the goal executing (or already ended): it has handed it to its controller."""
-        return self._handle.status != GoalStatus.STATUS_ACCEPTED and self._handle.status != GoalStatus.STATUS_UNKNOWN
-
-    def wait(self, timeout: float | None = None) -> GoalOutcome:
-        """Block until the goal ends (timeout [s] of wall time, None = no limit) and return its outcome."""
-        _wait(self._result_future.done, float('inf') if timeout is None else timeout, 'the goal did not end')
-        r = self._result_future.result()
-        return GoalOutcome(r.result.error_code, r.result.error_string, STATUS_NAMES.get(r.status, str(r.status)))
 
 
 def delivery_margin(answers: Sequence[tuple[float, int]], delivery: float, points: int = 1) -> float:
@@ -221,13 +100,14 @@ class URClient:
         self._executor.add_node(self.node)
         self._spinner = SpinThread(self._executor, 'ur_client', pace=self._pace).start()
         try:
-            _wait(self._action.server_is_ready, timeout, f'FollowJointTrajectory server {self.action_name} not found')
+            wait_until(self._action.server_is_ready, timeout,
+                       f'FollowJointTrajectory server {self.action_name} not found')
             try:
                 self._action.wait_until_answering(timeout)
             except TimeoutError as e:
                 raise ClientError(str(e)) from None
-            _wait(lambda: self._latest is not None, timeout, f'no joint states on {prefix}/joint_states')
-            _wait(lambda: self._topic.get_subscription_count() > 0, timeout,
+            wait_until(lambda: self._latest is not None, timeout, f'no joint states on {prefix}/joint_states')
+            wait_until(lambda: self._topic.get_subscription_count() > 0, timeout,
                   f'no subscriber on {prefix}/{controller_name}/joint_trajectory')
         except ClientError:
             self.close()
@@ -290,7 +170,7 @@ class URClient:
     def record(self, duration: float, rate: float = 50.0, timeout: float | None = None) -> Recording:
         """Record for `duration` [s] of message (robot) time, sampled at `rate` [Hz]; blocks until done."""
         recorder = self.start_recording(rate)
-        _wait(lambda: recorder.span() >= duration - 1.0 / rate, timeout or duration * 10 + 10.0,
+        wait_until(lambda: recorder.span() >= duration - 1.0 / rate, timeout or duration * 10 + 10.0,
               'recording did not finish')
         return self.stop_recording(recorder, duration)
 
@@ -304,12 +184,12 @@ class URClient:
     def sleep(self, duration: float, timeout: float | None = None) -> None:
         """Wait `duration` [s] of robot time (joint state stamps), which runs at any real-time factor."""
         t_end = self.joint_state().t + duration
-        _wait(lambda: self.joint_state().t >= t_end, timeout or duration * 10 + 10.0, 'robot time did not advance')
+        wait_until(lambda: self.joint_state().t >= t_end, timeout or duration * 10 + 10.0, 'robot time did not advance')
 
     # ---- kinematics ------------------------------------------------------------------------------
     def robot_description(self, timeout: float = 10.0) -> str:
         """The URDF on robot_description (transient local, as the UR driver and ur_sim publish it)."""
-        _wait(lambda: self._urdf is not None, timeout, f'no URDF on {self._prefix}/robot_description')
+        wait_until(lambda: self._urdf is not None, timeout, f'no URDF on {self._prefix}/robot_description')
         return self._urdf
 
     def kinematics(self, frame: str = 'tool0', base_pose: np.ndarray | None = None) -> Kinematics:
@@ -406,7 +286,7 @@ class URClient:
         sent_at = time.monotonic()
         future = self._action.send_goal_async(
             goal, feedback_callback=lambda msg: holder and holder[0]._feedback(msg))
-        _wait(future.done, timeout, f'no answer to the goal from {self.action_name}')
+        wait_until(future.done, timeout, f'no answer to the goal from {self.action_name}')
         self.goal_answers.append((time.monotonic() - sent_at, len(goal.trajectory.points)))
         handle = future.result()
         if not handle.accepted:

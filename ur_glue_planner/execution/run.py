@@ -15,10 +15,11 @@ from pathlib import Path
 from ur_glue_planner.errors import ClientError
 from ur_glue_planner.execution.bag_recorder import BagRecorder
 from ur_glue_planner.execution.bead_listener import BeadListener
-from ur_glue_planner.execution.client import GoalOutcome, URClient
+from ur_glue_planner.execution.client import URClient
 from ur_glue_planner.execution.dispenser_io import DispenserIO
 from ur_glue_planner.execution.planned_path import publish_planned_path, tf_prefix_of
 from ur_glue_planner.execution.switch_timer import SwitchEvent
+from ur_glue_planner.execution.trajectory_goal import GoalOutcome
 from ur_glue_planner.motion.plan import GluePlan
 from ur_glue_planner.report.glue_report import Executed
 
