@@ -6,7 +6,7 @@ import pytest
 from rclpy.action import get_action_server_names_and_types_by_node
 from sim_harness import running_sim, wait_still
 
-from ur_sim_driver.gateway.trajectory_gateway import NODE_NAME
+from ur_sim_driver.gateway.gateway_process import NODE_NAME
 
 pytestmark = pytest.mark.timeout(120)
 

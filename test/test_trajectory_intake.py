@@ -80,7 +80,7 @@ def rss_mb(pid: int) -> float:
 
 
 def test_the_controller_process_gives_a_long_goals_and_messages_memory_back(h):
-    # The process that takes goals and messages (trajectory_gateway.py) reads them into arrays, hands them over
+    # The process that takes goals and messages (gateway_process.py) reads them into arrays, hands them over
     # and lets go: no pool of receive buffers, no heap that keeps what the points took.
     gateway = h.sim.gateway.process.pid
     before = rss_mb(gateway)

@@ -1,10 +1,10 @@
 """scaled_joint_trajectory_controller and joint_trajectory_controller: the JTC as a controller of ur_sim.
 
-The per-cycle logic is ``jtc.py`` (trajectory, tolerances, goal supervision); this module gives it the
-controller's lifecycle and its interfaces. ``~/follow_joint_trajectory`` and ``~/joint_trajectory`` are served by
-the gateway process (``trajectory_gateway.py``, one node per controller there) so that receiving a large goal
-never stalls the simulation loop; this side executes what the gateway hands over and serves, on the controller's
-own node in this process, ``~/controller_state`` (every cycle while active), ``~/query_state``
+The per-cycle logic is ``jtc.py`` (trajectory, tolerances, goal supervision); this module gives it the controller's
+lifecycle and its interfaces. ``~/follow_joint_trajectory`` and ``~/joint_trajectory`` are served by the gateway process
+(``gateway_process.py``, one ``TrajectoryGateway`` per controller on its node) so that receiving a large goal never
+stalls the simulation loop; this side executes what the gateway hands over and serves, on the controller's own node in
+this process, ``~/controller_state`` (every cycle while active), ``~/query_state``
 (control_msgs/srv/QueryTrajectoryState) and ``~/speed_scaling_input`` (control_msgs/msg/SpeedScalingFactor).
 
 The scaled controller advances trajectory time by the robot's speed scaling (the hardware's

@@ -1,13 +1,13 @@
 """The link between the simulation process and the trajectory controller's interface process.
 
 The trajectory controllers' action servers and joint_trajectory subscriptions live in a process of their own
-(``trajectory_gateway.py``), so that receiving and converting a large trajectory (rclpy takes an action goal in
-C while holding the GIL: about 0.1 s per 100,000 points here even read straight into arrays, ``goal_intake.py``)
-never stops the simulation loop, which must publish every 2 ms. The gateway's job is intake: it takes goals and
-messages in, converts and validates them, and owns the action goals' handles until they end. Everything about the
-robot and the controllers (which is active, whether the robot can move, the simulated time) is owned by the
-simulation and asked for, never copied: the two processes exchange the small messages below over one pipe, in
-order:
+(``gateway_process.py``, one ``trajectory_gateway.py`` per controller), so that receiving and converting a large
+trajectory (rclpy takes an action goal in C while holding the GIL: about 0.1 s per 100,000 points here even read
+straight into arrays, ``goal_intake.py``) never stops the simulation loop, which must publish every 2 ms. The gateway's
+job is intake: it takes goals and messages in, converts and validates them, and owns the action goals' handles until
+they end. Everything about the robot and the controllers (which is active, whether the robot can move, the simulated
+time) is owned by the simulation and asked for, never copied: the two processes exchange the small messages below over
+one pipe, in order:
 
 * gateway -> simulation: :class:`Admit` (may this controller take a goal or message now?), :class:`Start` (a
   validated trajectory, in the sender's joint order), :class:`Cancel`, :class:`Dropped` (a joint_trajectory
@@ -19,7 +19,7 @@ One gateway process serves every trajectory controller from one node of its own 
 the controllers' nodes are ur_sim's); Admit, Start and Cancel name the controller, the other messages follow the
 request or the goal's token.
 
-The gateway is started as ``python -m ur_sim_driver.gateway.trajectory_gateway`` with the pipe (a socket pair)
+The gateway is started as ``python -m ur_sim_driver.gateway.gateway_process`` with the pipe (a socket pair)
 handed over as a file descriptor, not through multiprocessing's spawn, which re-imports the caller's main module:
 a user's plain script that builds a UrSimNode without an ``if __name__`` guard would start itself again.
 """
@@ -178,7 +178,7 @@ class GatewayLink:
     def __init__(self, config: GatewayConfig, on_message: Callable[[object], None]) -> None:
         parent_end, child_end = socket.socketpair()
         self.process = subprocess.Popen(
-            [sys.executable, '-m', 'ur_sim_driver.gateway.trajectory_gateway', str(child_end.fileno())],
+            [sys.executable, '-m', 'ur_sim_driver.gateway.gateway_process', str(child_end.fileno())],
             # Its own session: a Ctrl-C (or a test's SIGINT to ur_sim's process group) must not interrupt it while
             # it imports; ur_sim stops it through the pipe, and it exits on its own when the pipe closes.
             pass_fds=(child_end.fileno(),), start_new_session=True)

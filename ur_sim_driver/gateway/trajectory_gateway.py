@@ -1,12 +1,12 @@
-"""The trajectory controllers' ROS interfaces, in a process of their own (see ``gateway_link.py`` for why).
+"""One trajectory controller's ROS interfaces, in the gateway process (``gateway_process.py``; ``gateway_link.py``
+says why).
 
-This process holds one node, ``ur_sim_trajectory_gateway`` (the controllers' own nodes, named after them as in
-ros2_control, are ur_sim's). For each trajectory controller (scaled_joint_trajectory_controller,
-joint_trajectory_controller, passthrough_trajectory_controller) it serves ``<controller>/follow_joint_trajectory``
-and subscribes to ``<controller>/joint_trajectory``; it asks the simulation whether the controller may take what
-arrives (:class:`~ur_sim_driver.gateway.gateway_link.Admit`: the simulation owns which controller is active and
-whether the robot can move, and answers with upstream's words), validates it, and hands each accepted trajectory
-to the simulation, which executes it and reports back.
+For each trajectory controller (scaled_joint_trajectory_controller, joint_trajectory_controller,
+passthrough_trajectory_controller) a ``TrajectoryGateway`` on the process's node serves
+``<controller>/follow_joint_trajectory`` and subscribes to ``<controller>/joint_trajectory``. It asks the
+simulation whether the controller may take what arrives (:class:`~ur_sim_driver.gateway.gateway_link.Admit`: the
+simulation owns which controller is active and whether the robot can move, and answers with upstream's words),
+validates it, and hands each accepted trajectory to the simulation, which executes it and reports back.
 
 Order: goal requests, their acceptance and topic messages are handled one at a time in one mutually
 exclusive callback group, and each accepted trajectory is handed over at acceptance, in that order. So the
@@ -15,31 +15,19 @@ INVALID_GOAL "Current goal preempted by new incoming action.".
 """
 from __future__ import annotations
 
-import faulthandler
-import itertools
-import signal
-import sys
 import threading
 import time
 import traceback
 from dataclasses import replace
-from multiprocessing.connection import Connection
 
-import rclpy
 from control_msgs.action import FollowJointTrajectory
 from rclpy.action import CancelResponse, GoalResponse
 from rclpy.callback_groups import MutuallyExclusiveCallbackGroup
-from rclpy.executors import ExternalShutdownException, MultiThreadedExecutor
 from rclpy.node import Node
-from rclpy.signals import SignalHandlerOptions
 from trajectory_msgs.msg import JointTrajectory
 
 from ur_sim_driver.errors import TrajectoryError
-from ur_sim_driver.gateway.dds_profile import free_received_samples
 from ur_sim_driver.gateway.gateway_link import (
-    STOP,
-    Admission,
-    Admit,
     Cancel,
     Canceled,
     Dropped,
@@ -49,8 +37,9 @@ from ur_sim_driver.gateway.gateway_link import (
     Received,
     Start,
 )
-from ur_sim_driver.gateway.goal_intake import ArrayGoalActionServer, intake_error
-from ur_sim_driver.gateway.memory import release_memory, trim_heap, use_mmap_for_large_blocks
+from ur_sim_driver.gateway.goal_intake import ArrayGoalActionServer
+from ur_sim_driver.gateway.memory import release_memory, trim_heap
+from ur_sim_driver.gateway.sim_pipe import SimPipe
 from ur_sim_driver.gateway.trajectory_cdr import read_joint_trajectory
 from ur_sim_driver.motion import conversions as conv
 from ur_sim_driver.motion import passthrough, result_codes
@@ -61,12 +50,8 @@ from ur_sim_driver.motion.validation import validate_trajectory
 
 # From this many points on, the memory of a received trajectory is handed back to the system when it is done.
 LARGE_TRAJECTORY = 10_000
-# How long a goal or message waits for the simulation's Admission [s of wall time]: the simulation answers from
-# its receiving thread at once, so only a simulation that is gone or hung takes this long.
-ADMIT_TIMEOUT = 10.0
 RECEIVED_TIMEOUT = 10.0  # [s] of wall time for the simulation to confirm an accepted goal (a hang guard)
 NOT_ANSWERING = 'ur_sim does not answer (shutting down?)'
-NODE_NAME = 'ur_sim_trajectory_gateway'
 _SHUTDOWN = Ended(None, result_codes.INVALID_GOAL, 'ur_sim is shutting down.')
 
 
@@ -80,54 +65,15 @@ class _Waiter:
         self.canceled: bool | None = None
 
 
-class _Shared:
-    """What the controllers of this process share: the pipe (one sender at a time) and the questions to the
-    simulation that wait for its answer."""
-
-    def __init__(self, conn: Connection) -> None:
-        self.conn = conn
-        self.send_lock = threading.Lock()
-        self._numbers = itertools.count()
-        self._lock = threading.Lock()
-        self._asked: dict[int, list] = {}  # request -> [event, Admission | None]
-
-    def admit(self, controller: str, topic: bool) -> Admission | None:
-        """Ask the simulation whether `controller` may take a goal (or a topic message) now; None if it does not
-        answer within ADMIT_TIMEOUT."""
-        request = next(self._numbers)
-        slot = [threading.Event(), None]
-        with self._lock:
-            self._asked[request] = slot
-        _send(self, Admit(request, controller, topic))
-        slot[0].wait(ADMIT_TIMEOUT)
-        with self._lock:
-            self._asked.pop(request, None)
-        return slot[1]
-
-    def answered(self, admission: Admission) -> None:
-        with self._lock:
-            slot = self._asked.get(admission.request)
-        if slot is not None:
-            slot[1] = admission
-            slot[0].set()
-
-    def end_all(self) -> None:
-        """The simulation is gone: every question ends unanswered."""
-        with self._lock:
-            slots = list(self._asked.values())
-        for slot in slots:
-            slot[0].set()
-
-
 class TrajectoryGateway:
     """One controller's action server and topic subscription on `node`, talking to the simulation."""
 
-    def __init__(self, node: Node, cfg: GatewayConfig, name: str, shared: _Shared) -> None:
+    def __init__(self, node: Node, cfg: GatewayConfig, name: str, pipe: SimPipe) -> None:
         self.node = node
         self.log = node.get_logger().get_child(name)
         self.cfg = cfg
         self.name = name
-        self._shared = shared
+        self._pipe = pipe
         self._lock = threading.Lock()
         self._waiters: dict[bytes, _Waiter] = {}
         self._handles: dict[bytes, object] = {}
@@ -188,7 +134,7 @@ class TrajectoryGateway:
             cmd = from_points(traj.joint_names, conv.time_to_sec(traj.header.stamp), traj.points)
         # Upstream's JTC rejects goals while inactive, and the controller_stopper deactivates it while the robot
         # cannot move: the simulation, which owns both, says whether this one may take the goal.
-        admission = self._shared.admit(self.name, topic=False)
+        admission = self._pipe.admit(self.name, topic=False)
         if admission is None:
             reason = NOT_ANSWERING
         elif admission.reason is not None:
@@ -255,7 +201,7 @@ class TrajectoryGateway:
             self.log.error(f'Dropped JointTrajectory message: {exc}')
             self._send(Dropped(self.name))
             return
-        admission = self._shared.admit(self.name, topic=True)
+        admission = self._pipe.admit(self.name, topic=True)
         reason = NOT_ANSWERING if admission is None else admission.reason
         if reason is not None:
             self.log.warning(f'Dropped JointTrajectory message: {reason}')
@@ -305,7 +251,7 @@ class TrajectoryGateway:
         return result
 
     def _send(self, message: object) -> None:
-        _send(self._shared, message)
+        self._pipe.send(message)
 
     def owns(self, token: bytes) -> bool:
         with self._lock:
@@ -358,79 +304,3 @@ class TrajectoryGateway:
                 pass
 
 
-def _send(shared: _Shared, message: object) -> None:
-    with shared.send_lock:
-        try:
-            shared.conn.send(message)
-        except (OSError, BrokenPipeError):
-            pass  # the simulation is gone; the receiving thread ends every goal
-
-
-def _receive(shared: _Shared, gateways: dict[str, TrajectoryGateway], stopped: threading.Event) -> None:
-    """Hand the simulation's messages to the controllers until it says stop or the pipe closes."""
-    try:
-        while True:
-            message = shared.conn.recv()
-            if message == STOP:
-                break
-            if isinstance(message, Admission):
-                shared.answered(message)
-            else:
-                for gateway in gateways.values():
-                    if gateway.owns(message.token):
-                        gateway.dispatch(message)
-                        break
-    except (OSError, EOFError):
-        pass
-    shared.end_all()
-    for gateway in gateways.values():
-        gateway.end_all()
-    stopped.set()
-
-
-def run_gateway(conn: Connection) -> None:
-    """Serve the controllers' interfaces until the simulation says stop (or its end of the pipe closes)."""
-    # The parent stops this process through the pipe; Ctrl-C in a terminal reaches both, and the parent must
-    # be the one to decide (it ends the goals first).
-    signal.signal(signal.SIGINT, signal.SIG_IGN)
-    faulthandler.register(signal.SIGUSR1)  # `kill -USR1 <pid>` prints every thread's stack, for a hang
-    use_mmap_for_large_blocks()
-    cfg: GatewayConfig = conn.recv()
-    profile = free_received_samples()  # a large goal's receive buffer is not kept after it
-    rclpy.init(signal_handler_options=SignalHandlerOptions.NO)
-    shared = _Shared(conn)
-    executor = MultiThreadedExecutor(num_threads=4)
-    try:
-        node = Node(NODE_NAME, namespace=cfg.namespace or '/')
-    finally:
-        if profile is not None:
-            profile.unlink(missing_ok=True)  # read when the node was made
-    gateways = {name: TrajectoryGateway(node, cfg, name, shared) for name in cfg.controllers}
-    executor.add_node(node)
-    if intake_error() is not None:
-        node.get_logger().warning(
-            f'goal requests are converted point by point (slow for long trajectories): {intake_error()}')
-    stopped = threading.Event()
-    threading.Thread(target=_receive, args=(shared, gateways, stopped), name='gateway_receive', daemon=True).start()
-    try:
-        while not stopped.is_set() and rclpy.ok():
-            executor.spin_once(timeout_sec=0.05)
-        # Let the execute callbacks return their (shutdown) results before the context goes.
-        for _ in range(20):
-            executor.spin_once(timeout_sec=0.01)
-    except (KeyboardInterrupt, ExternalShutdownException):
-        pass
-    finally:
-        executor.shutdown(timeout_sec=2.0)
-        node.destroy_node()
-        rclpy.try_shutdown()
-        conn.close()
-
-
-def main() -> None:
-    """``python -m ur_sim_driver.gateway.trajectory_gateway PIPE_FD``, as GatewayLink starts it."""
-    run_gateway(Connection(int(sys.argv[1])))
-
-
-if __name__ == '__main__':
-    main()

@@ -5,7 +5,7 @@ possible) and publishes every control cycle. The driver's controllers are compon
 own node, held by the controller manager (``controllers/controller_manager_node.py``), which switches them between two
 cycles; the active joint controller (a trajectory or forward command controller) gives the robot its reference
 every cycle. The trajectory controllers' action servers and joint_trajectory subscriptions run in a process of
-their own (``trajectory_gateway.py``, started here), so that receiving a large trajectory never holds up the
+their own (``gateway/gateway_process.py``, started here), so that receiving a large trajectory never holds up the
 loop; a receiving thread hands its trajectories and cancels to their controller under one lock, and the
 controllers send back outcomes and feedback. Every stamp is simulated time on the stamps' clock
 (``conversions.RobotClock``: in real time counted from the system clock at start), which the node publishes on
