@@ -1,10 +1,11 @@
 """The studio page (viser): scene, teaching, preview, save/load, run and live view, wired to the pure modules.
 
 Everything here is the thin edge: the panel's controls are :mod:`~ur_glue_planner.studio.panel`'s, teaching is
-:class:`~ur_glue_planner.studio.teach_view.TeachView`'s, the live robot :class:`~ur_glue_planner.studio.live_view.
-LiveView`'s, files go through :mod:`~ur_glue_planner.studio.job_file`, playback through
-:mod:`~ur_glue_planner.studio.playback`, the plan through :func:`~ur_glue_planner.motion.plan.plan_job` and running
-through :mod:`~ur_glue_planner.studio.ros_link`.
+:class:`~ur_glue_planner.studio.teach_view.TeachView`'s, planning and preview
+:class:`~ur_glue_planner.studio.plan_view.PlanView`'s, running :class:`~ur_glue_planner.studio.run_view.RunView`'s
+(through :mod:`~ur_glue_planner.studio.ros_link`), the live robot :class:`~ur_glue_planner.studio.live_view.
+LiveView`'s; files go through :mod:`~ur_glue_planner.studio.job_file`. This module loads a job and its scene, and
+runs the page loop.
 """
 from __future__ import annotations
 
@@ -18,25 +19,25 @@ import viser
 
 from ur_glue_planner.errors import GluePlannerError, JobError
 from ur_glue_planner.motion.ik_branch import choose_branch
-from ur_glue_planner.motion.plan import GluePlan, plan_job
+from ur_glue_planner.motion.plan import GluePlan
 from ur_glue_planner.motion.ur_arm_kinematics import ur_kinematics
 from ur_glue_planner.orientation import rotation_from_zyx_euler
 from ur_glue_planner.path.glue_path import build_glue_path
 from ur_glue_planner.scene.waypoints import windshield_model
 from ur_glue_planner.studio import scene_view as sv
-from ur_glue_planner.studio.figures import plan_figures, speed_summary
-from ur_glue_planner.studio.job_file import StudioJob, read_job, studio_job, teach_state, write_job
-from ur_glue_planner.studio.legend import MODEL_OPACITY, MODEL_TINT, SPEED_SCALE, legend_entries, legend_html
+from ur_glue_planner.studio.job_file import StudioJob, read_job, teach_state, write_job
+from ur_glue_planner.studio.legend import MODEL_OPACITY, MODEL_TINT, legend_entries, legend_html
 from ur_glue_planner.studio.live_view import LiveView
 from ur_glue_planner.studio.messages import MessageLog, log_html
 from ur_glue_planner.studio.panel import LIVE_TEXT, build_panel
-from ur_glue_planner.studio.part_view import PartView, measured_part
-from ur_glue_planner.studio.plan_failure import plan_failure
-from ur_glue_planner.studio.playback import Clock, Timeline, bead_segments
+from ur_glue_planner.studio.part_view import PartView
+from ur_glue_planner.studio.plan_view import SHOW_ABOVE, PlanView
+from ur_glue_planner.studio.playback import Clock, Timeline
 from ur_glue_planner.studio.reach import GlassCollision, Reach, ReachResult
 from ur_glue_planner.studio.robot_geometry import RobotModel, ur_shapes
 from ur_glue_planner.studio.robot_status import no_ros_status, status_html
 from ur_glue_planner.studio.ros_link import LiveRobot, RunResult
+from ur_glue_planner.studio.run_view import RunView
 from ur_glue_planner.studio.scene_assets import glass_mesh_path, glass_pieces, glass_pose
 from ur_glue_planner.studio.teach_view import TeachView
 from ur_glue_planner.studio.teaching import TeachState
@@ -48,10 +49,9 @@ LOOP_RATE = 60.0  # [Hz] page updates: playback, live robot
 # [m] camera position and look-at for a new page: from beyond the glass, looking back at the robot (the look-at
 # lies beside the cell so that the cell shows left of the control panel)
 INITIAL_CAMERA = ((0.45, 1.5, 1.0), (-0.3, 0.4, 0.28))
-SHOW_ABOVE = 0.002  # [m] paths are drawn this far above the glass so that it does not hide them
 
 
-class Studio(TeachView):
+class Studio(TeachView, PlanView, RunView):
     """The glue studio served on http://host:port.
 
     Args:
@@ -189,20 +189,6 @@ class Studio(TeachView):
             self.show_ik()
         self.say(f'loaded {sjob.path} ({len(self.teach.waypoints)} waypoints, {job.ur_type}, tool {job.tool})')
 
-    def _clear_plan(self) -> None:
-        """No plan: its bead line, figures, text, slider and the executed path leave the page."""
-        self.plan = self.timeline = self.clock = None
-        if self._planned_bead is not None:
-            self._planned_bead.remove()
-            self._planned_bead = None
-        for image in self.panel.images.values():
-            image.visible = False
-        self.panel.plan_info.content = 'No plan yet: press **Plan**.'
-        self.panel.time.max = 1.0
-        self.panel.time.value = 0.0
-        self.part_view.clear()
-        self._reset_trail()
-
     def _show_glass(self) -> None:
         mesh = trimesh.load(glass_mesh_path(self.sjob.job.windshield), force='mesh')
         pose = glass_pose(self.sjob.job.windshield)
@@ -232,90 +218,6 @@ class Studio(TeachView):
         except (GluePlannerError, ValueError):
             return np.array(job.home)
 
-    # ---- plan and playback -------------------------------------------------------------------------------------
-    def start_state(self) -> np.ndarray:
-        """Where the plan starts: the live robot's joint positions if it is this arm, else the job's home."""
-        state = self.live.state() if self.live is not None else None
-        if state is not None and tuple(state.names[:6]) == tuple(joint_names()):
-            return np.array(state.q[:6])
-        return np.array(self.sjob.job.home)
-
-    def explain_failure(self, planner_message: str) -> str:
-        """Why planning the taught waypoints failed, in the Teach tab's words (plan_failure.py)."""
-        with self._lock:
-            teach = self.teach
-        results = self.reach_of(teach)
-        self._keep_reach(teach, results)
-        return plan_failure(planner_message, results, teach.planned_indices())
-
-    def plan_now(self) -> GluePlan | None:
-        """Plan the taught job (the planner's plan_job), draw the bead by speed, show the figures.
-
-        The model robot then shows the selected waypoint's IK again; play or the slider play the plan on it.
-        """
-        self.begin('planning ...')
-        with self._lock:
-            if self.sjob is None:
-                return None
-            try:
-                job = studio_job(self.sjob, self.teach).job
-            except JobError as exc:
-                self.say(f'cannot plan: {exc}')
-                return None
-        found, reason = measured_part(self.live.scan() if self.live is not None else None, job, self.say)
-        if reason is not None:
-            self.say(f'part refused: {reason}')
-            return None
-        try:
-            plan = plan_job(job, self.start_state(), part=found)
-        except GluePlannerError as exc:
-            self.say(f'planning failed: {self.explain_failure(str(exc))}')
-            return None
-        figures = plan_figures(plan)
-        with self._lock:
-            self._clear_plan()
-            self.plan, self.timeline = plan, Timeline.from_plan(plan)
-            self.clock = Clock(self.timeline.duration, speed=float(self.panel.speed.value))
-            self._q_ref = plan.bead.q[0]
-            segs, colors = bead_segments(plan, v_max=SPEED_SCALE * plan.job.tcp_speed)
-            _, _, normal = self.glass.project(segs.reshape(-1, 3))
-            lifted = segs + SHOW_ABOVE * normal.reshape(segs.shape)  # drawn just above the glass, not inside it
-            self._planned_bead = self.server.scene.add_line_segments('/planned_bead', lifted, colors, thickness=0.005)
-            self.panel.time.max = round(self.timeline.duration, 2)
-            for name, image in figures.items():
-                self.panel.images[name].image = image
-                self.panel.images[name].visible = True
-            self.panel.plan_info.content = speed_summary(plan)
-            self.part_view.show(plan)
-            self.show_ik()
-        self.say(f'planned: bead {plan.summary.bead_length:.3f} m, {plan.summary.total_duration:.2f} s')
-        return plan
-
-    def _on_play(self, what: str) -> None:
-        with self._lock:
-            if self.clock is None:
-                self.say('press Plan first')
-                return
-            self.mode = 'preview'
-            self._model_view.set_visible(True)
-            self.clock = self.clock.play() if what == 'play' else self.clock.pause()
-            self._model_view.show(joint_names(), self.timeline.q_at(self.clock.t))
-
-    def _on_scrub(self, event) -> None:
-        if event.client is None:
-            return
-        with self._lock:
-            if self.clock is not None:
-                self.mode = 'preview'
-                self._model_view.set_visible(True)
-                self.clock = self.clock.seek(float(self.panel.time.value))
-                self._model_view.show(joint_names(), self.timeline.q_at(self.clock.t))
-
-    def _on_speed(self, event) -> None:
-        with self._lock:
-            if self.clock is not None:
-                self.clock = self.clock.with_speed(float(self.panel.speed.value))
-
     # ---- save ----------------------------------------------------------------------------------------------------
     def save(self, path: str | Path) -> Path | None:
         """Write the taught job (the waypoints the plan uses) to ``path``."""
@@ -331,70 +233,10 @@ class Studio(TeachView):
                  + (f' ({skipped} unsaved skipped)' if skipped else ''))
         return Path(path)
 
-    # ---- run -------------------------------------------------------------------------------------------------------
-    def run(self) -> None:
-        """Plan from the robot's current state and execute through FollowJointTrajectory (as ur_glue_planner)."""
-        with self._lock:
-            if self.live is None:
-                self.say('run: no ROS connection')
-                return
-            if self.live.running:
-                self.say('run: already running')
-                return
-            self.begin('run: planning from the robot\'s state ...')
-            try:
-                job = studio_job(self.sjob, self.teach).job
-            except JobError as exc:
-                self.say(f'run: {exc}')
-                return
-            self.run_result = None
-            self.run_progress = (None, 0.0, 0.0)
-            self.panel.progress.value = 0.0
-            self.panel.run_info.content = 'connecting ...'
-            self._reset_trail()
-            self.mode = 'run'
-            self._model_view.set_visible(False)  # the live robot is the one to watch
-        self.live.start_run(job, self._namespace or job.namespace, self._controller or job.controller_name,
-                            log=self._run_log, on_progress=self._on_run_progress, on_done=self._on_run_done)
-
-    def stop_run(self) -> None:
-        if self.live is not None and self.live.running:
-            self.say('stop: cancelling the goal')
-            self.live.stop_run()
-
-    def _run_log(self, text: str) -> None:
-        if not text.lstrip().startswith('['):
-            self.say(text.strip())
-
-    def _on_run_progress(self, segment: str, fraction: float, error: float) -> None:
-        self.run_progress = (segment, fraction, error)
-
-    def _on_run_done(self, result: RunResult, plan: GluePlan | None) -> None:
-        message = self.explain_failure(result.message) if result.planning_failed else result.message
-        with self._lock:
-            self.run_result = result
-            if plan is not None:
-                self.part_view.show(plan)  # the part as measured for this run
-            word = 'succeeded' if result.succeeded else 'failed'
-            self.panel.run_info.content = f'**Run {word}**: {message}'
-            if self.mode == 'run':  # the IK robot again, beside the live one
-                self.show_ik()
-        self.say(f'run {word}: {message}')
-
     # ---- live robot and the page loop ------------------------------------------------------------------------------
     def _reset_trail(self) -> None:
         if self.live_view is not None:
             self.live_view.reset_trail()
-
-    def _update_run_gui(self) -> None:
-        # The progress line until the run's result: once set, the result stays shown.
-        if self.sjob is None or self.live is None or not self.live.running or self.run_result is not None:
-            return
-        segment, fraction, error = self.run_progress
-        if segment is not None:
-            self.panel.progress.value = 100.0 * fraction
-            self.panel.run_info.content = (f'running **{segment}**: {100 * fraction:.0f} %, max joint tracking '
-                                           f'error {error * 1e3:.2f} mrad')
 
     def _update_status(self) -> None:
         """The robot status line (sent only when its text changes) and the live viewer's traced frame."""
