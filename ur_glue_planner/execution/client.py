@@ -32,11 +32,7 @@ from std_msgs.msg import String
 
 from ur_glue_planner.errors import ClientError
 from ur_glue_planner.execution import ros_conversions as conv
-from ur_glue_planner.execution.joint_state_recording import (
-    JointStateRecorder,
-    JointStateSample,
-    Recording,
-)
+from ur_glue_planner.execution.joint_state_recording import JointStateRecorder, JointStateSample, Recording
 from ur_glue_planner.execution.trajectory_goal import GoalOutcome, TrajectoryGoal, wait_until
 from ur_glue_planner.motion.kinematics import IkResult, Kinematics
 from ur_sim_driver.action_client import ActionClient
@@ -108,7 +104,7 @@ class URClient:
                 raise ClientError(str(e)) from None
             wait_until(lambda: self._latest is not None, timeout, f'no joint states on {prefix}/joint_states')
             wait_until(lambda: self._topic.get_subscription_count() > 0, timeout,
-                  f'no subscriber on {prefix}/{controller_name}/joint_trajectory')
+                       f'no subscriber on {prefix}/{controller_name}/joint_trajectory')
         except ClientError:
             self.close()
             raise
@@ -171,7 +167,7 @@ class URClient:
         """Record for `duration` [s] of message (robot) time, sampled at `rate` [Hz]; blocks until done."""
         recorder = self.start_recording(rate)
         wait_until(lambda: recorder.span() >= duration - 1.0 / rate, timeout or duration * 10 + 10.0,
-              'recording did not finish')
+                   'recording did not finish')
         return self.stop_recording(recorder, duration)
 
     def stop_recording(self, recorder: JointStateRecorder, duration: float | None = None,
