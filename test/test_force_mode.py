@@ -9,7 +9,7 @@ import pytest
 from cm_helpers import ControllerManagerClient
 from geometry_msgs.msg import WrenchStamped
 from scipy.spatial.transform import Rotation
-from sim_harness import point, running_sim, wait_answer, wait_for, wait_still
+from sim_harness import SETTLED_SPEED, point, running_sim, wait_answer, wait_for, wait_still
 from std_srvs.srv import Trigger
 from ur_dashboard_msgs.msg import SafetyMode
 from ur_msgs.srv import SetForceMode
@@ -135,8 +135,11 @@ def test_pressing_on_the_floor_settles_at_the_requested_force(rig):
 
 
 def _move(h, q) -> None:
+    """To `q`, and at rest there: a switch away from the trajectory controller while the arm still moves would brake
+    it (stopj) from where it is, beyond `q`."""
     handle = h.send(h.goal([point(q, 4.0)]))
     assert handle.accepted and h.result(handle)[1] == 0
+    wait_for(lambda: float(np.max(np.abs(h.sim.sim.state().qd))) < SETTLED_SPEED, what='the arm at rest')
 
 
 def test_deactivation_ends_force_mode_and_the_robot_holds_still(rig):

@@ -3,7 +3,7 @@ import numpy as np
 import pytest
 
 from ur_sim_driver.physics.physics import Contact
-from ur_sim_driver.robot.safety import LIMIT_MARGIN, ContactSafety, any_outside, limit_cause
+from ur_sim_driver.robot.safety import LIMIT_MARGIN, REFERENCE_TOLERANCE, ContactSafety, any_outside, limit_cause
 from ur_sim_driver.robot.sim_config import sim_config_from_params
 from ur_sim_driver.robot.simulator import Simulator
 
@@ -69,6 +69,12 @@ def test_a_joint_driven_into_its_limit_stops_but_one_ending_at_it_does_not():
     assert limit_cause(q, ref, Q_MIN, Q_MAX, NAMES) is None
     q[4], ref[4] = -1.0, -2.0
     assert 'j4 driven into its position limit -1.0000 rad' in limit_cause(q, ref, Q_MIN, Q_MAX, NAMES)
+    # An arm braked to rest at a limit settles microradians past it; holding it there drives it no further.
+    q, ref = np.zeros(6), np.zeros(6)
+    q[1] = ref[1] = 1.0 + 2e-6
+    assert limit_cause(q, ref, Q_MIN, Q_MAX, NAMES) is None
+    ref[1] = 1.0 + 2.0 * REFERENCE_TOLERANCE
+    assert limit_cause(q, ref, Q_MIN, Q_MAX, NAMES).startswith('j1 driven into its position limit 1.0000 rad')
 
 
 @pytest.mark.parametrize('ur_type', ['ur5', 'ur5e', 'ur10', 'ur10e'])

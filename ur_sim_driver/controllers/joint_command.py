@@ -4,8 +4,8 @@ In ros2_control such a controller writes the joints' command interfaces (``<join
 the UR hardware turns them into the robot's motion. Here the active one hands the robot's servo a reference
 (:class:`~ur_sim_driver.motion.trajectory.TrajectorySample`) and the position it must not pass, from the simulation
 loop under the simulation lock. The controller manager lets at most one be active (they claim the same joints'
-interfaces, or modes the hardware cannot run together); with none active the robot holds where it is
-(:class:`HoldPosition`), as the UR hardware keeps its last position command.
+interfaces, or modes the hardware cannot run together); with none active the robot holds where it is, or brakes
+and holds where it comes to rest (:class:`HoldPosition`).
 """
 from __future__ import annotations
 
@@ -14,6 +14,7 @@ import numpy as np
 from ur_sim_driver.controllers.base import Component
 from ur_sim_driver.motion.trajectory import TrajectorySample
 from ur_sim_driver.physics.physics import ArmState
+from ur_sim_driver.urscript.moves import Speed
 
 
 class JointCommander:
@@ -65,26 +66,45 @@ class JointCommandController(Component, JointCommander):
 
 
 class HoldPosition(JointCommander):
-    """The robot without an active joint controller: it holds the measured position where the last one left, as
-    the UR hardware keeps its last position command; after torque control, where the arm comes to rest (:meth:`stop`).
+    """The robot without an active joint controller. Taken over at rest it holds the measured position, as the UR
+    hardware keeps its last position command. Taken over from a moving arm (:meth:`stop`) it brakes as the driver's
+    program does when no controller commands (stopj: linear in joint space, the leading joint at a given
+    deceleration) and holds where the arm comes to rest.
     """
 
     def __init__(self) -> None:
-        self._sample: TrajectorySample | None = None
+        self._sample: TrajectorySample | None = None  # the hold (where the braking ends)
+        self._braking: Speed | None = None
+        self._elapsed = 0.0  # [s] since the braking began
+        self._limits: tuple[np.ndarray, np.ndarray] | None = None
 
     def take_over(self, state: ArmState) -> None:
         zero = np.zeros_like(state.q)
         self._sample = TrajectorySample(state.q.copy(), zero, zero.copy(), 0, True)
+        self._braking = None
 
-    def stop(self, state: ArmState, deceleration, q_min: np.ndarray, q_max: np.ndarray) -> None:
-        """Take over from torque control, which no position command bounds: the arm holds where it comes to rest
-        braking at `deceleration` [rad/s^2] (a number or (n,)), within `q_min`, `q_max` (n,) [rad], instead of
-        turning back to where torque control ended."""
+    def stop(self, state: ArmState, deceleration: float, q_min: np.ndarray, q_max: np.ndarray) -> None:
+        """Take over from a moving arm: brake from the measured state (stopj, the leading joint at `deceleration`
+        [rad/s^2]) and hold where it comes to rest, within `q_min`, `q_max` (n,) [rad]; not back where the last
+        controller left off."""
         self.take_over(state)
-        q = np.clip(state.q + state.qd * np.abs(state.qd) / (2.0 * deceleration), q_min, q_max)
-        self._sample = TrajectorySample(q, self._sample.velocities, self._sample.accelerations, 0, True)
+        if not np.any(state.qd):
+            return
+        self._braking = Speed(state.q, state.qd, np.zeros_like(state.qd), deceleration, None)
+        self._elapsed = 0.0
+        self._limits = (q_min, q_max)
+        rest = np.clip(self._braking.sample(self._braking.duration)[0], q_min, q_max)
+        self._sample = TrajectorySample(rest, self._sample.velocities, self._sample.accelerations, 0, True)
 
     def command(self, state: ArmState, period: float) -> tuple[TrajectorySample, np.ndarray | None]:
         if self._sample is None:
             self.take_over(state)
+        if self._braking is not None:
+            # From the measured state on, one sample a period (the servo takes it up where the controller's
+            # reference left it); the hold is the stop point the servo does not pass.
+            if self._elapsed < self._braking.duration:
+                q, qd, qdd = self._braking.sample(self._elapsed)
+                self._elapsed += period
+                return TrajectorySample(np.clip(q, *self._limits), qd, qdd, 0, False), self._sample.positions
+            self._braking = None
         return self._sample, self._sample.positions

@@ -26,7 +26,7 @@ from dataclasses import dataclass
 
 import numpy as np
 
-# The External Control script ends its torque thread (torque control switched off) with stopj(4.0).
+# The External Control script ends its servo, speed and torque threads (no controller commands) with stopj(4.0).
 STOPJ_DECELERATION = 4.0  # [rad/s^2]
 DEFAULT_VISCOUS_SCALE = (0.9, 0.9, 0.8, 0.9, 0.9, 0.9)
 DEFAULT_COULOMB_SCALE = (0.8, 0.8, 0.7, 0.8, 0.8, 0.8)

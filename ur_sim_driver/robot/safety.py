@@ -37,6 +37,9 @@ DEFAULT_CONTACT_FORCE = 50.0  # [N] contact force that triggers a protective sto
 DEFAULT_FORCE_WINDOW = 0.01  # [s] the safety system's mean of the contact force
 FORCE_TOLERANCE = 25.0  # [N] how much harder than when armed a contact present then must push to stop the robot
 LIMIT_MARGIN = 1e-3  # [rad] a joint this close to a limit the reference lies beyond is "in" the limit
+# [rad] a reference this little past a limit does not drive the joint into it: an arm braked to rest at its limit
+# settles within microradians of it, on either side, and a controller that takes over holds where it is.
+REFERENCE_TOLERANCE = 1e-4
 
 
 class ContactSafety:
@@ -106,8 +109,9 @@ def limit_cause(q: np.ndarray, reference: np.ndarray, q_min: np.ndarray, q_max: 
     # Commands within the limits, the case of every cycle, are ruled out by one compiled call.
     if not any_outside(reference, q_min, q_max):
         return None
-    upper = (reference > q_max) & (q >= q_max - LIMIT_MARGIN)
-    hit = _first_hit(upper, (reference < q_min) & (q <= q_min + LIMIT_MARGIN), q_min, q_max)
+    upper = (reference > q_max + REFERENCE_TOLERANCE) & (q >= q_max - LIMIT_MARGIN)
+    lower = (reference < q_min - REFERENCE_TOLERANCE) & (q <= q_min + LIMIT_MARGIN)
+    hit = _first_hit(upper, lower, q_min, q_max)
     if hit is None:
         return None
     i, limit = hit

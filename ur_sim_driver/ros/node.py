@@ -268,13 +268,17 @@ class UrSimNode(Node):
                 commander = next((c for c in self._commanders if c.active), self._holder) if hardware.writes \
                     else self._holder
             if commander is not self._commander:
-                if commander is self._holder and self._commander is not None and self._commander.torques() is not None:
-                    # Torque control ended: switched off, the driver's program ends its torque thread with a stopj;
-                    # stopped by the robot, it brakes as hard as it can. Either way it holds where it comes to rest.
-                    p = self.sim.params
-                    braking = STOPJ_DECELERATION if self.robot.motion_refusal() is None \
-                        else BRAKE_CAPABILITY * self.sim.a_max
-                    self._holder.stop(reported, braking, p.q_min, p.q_max)
+                p = self.sim.params
+                stopped = commander is self._holder and self._commander is not None
+                if stopped and self.robot.motion_refusal() is None:
+                    # No controller commands any more (a switch): the driver's program ends its servo, speed or
+                    # torque thread with a stopj (hardware_interface.cpp write(): keepalive, MODE_IDLE), and the
+                    # arm holds where it comes to rest.
+                    self._holder.stop(reported, STOPJ_DECELERATION, p.q_min, p.q_max)
+                elif stopped and self._commander.torques() is not None:
+                    # Torque control stopped by the robot: it brakes as hard as it can and holds where it comes
+                    # to rest (no position command to hold).
+                    self._holder.stop(reported, BRAKE_CAPABILITY * p.a_max, p.q_min, p.q_max)
                 else:
                     commander.take_over(reported)
                 self._commander = commander
