@@ -1,6 +1,8 @@
 """The glue demo end to end on a real-time ur_sim with the windshield and the dispenser: our planner, then seed 1's
 method on the same job; the gun switched through set_io, the simulated bead judged, bead figures side by side, the
-video and the HTML page. Real time, because the gun's switching is judged against the simulated clock."""
+video and the HTML page. Real time, because the gun's switching is judged against the simulated clock; in step with
+the planner (pace_topic), so that a loaded machine's set_io delivery does not move a switch on the robot's clock
+(free-running, a gun-on delivered late under load once cost seed 1 its start blob)."""
 import json
 import threading
 
@@ -12,6 +14,7 @@ from ur_glue_planner.execution.node import run_job
 from ur_sim_driver.description.scene import config_dir
 
 V = 0.15
+PACE_TOPIC = '/ur_sim/pace'
 # Two whole glue jobs in real time (2 x 23.6 s of motion), their reports and the video are the `demo` fixture, set up
 # in whichever test of this module runs first: 90 s on an idle 2-core machine, and the motion cannot go faster.
 # Twice the default timeout (pytest.ini), for a loaded machine.
@@ -22,10 +25,11 @@ pytestmark = pytest.mark.timeout(600)
 def demo(tmp_path_factory):
     params = yaml_params(config_dir() / 'ur_sim_windshield.yaml')
     params['real_time_factor'] = 1.0
+    params['pace_topic'] = PACE_TOPIC
     out = tmp_path_factory.mktemp('glue_job')
     with running_sim(**params) as h:
         code = run_job({'job': str(config_dir() / 'glue_job.yaml'), 'out_dir': str(out), 'compare': True,
-                        'render': False}, threading.Event(), context=h.client.context)
+                        'render': False, 'pace_topic': PACE_TOPIC}, threading.Event(), context=h.client.context)
     return code, out, json.loads((out / 'summary.json').read_text())
 
 

@@ -6,7 +6,9 @@ Works against ur_sim and the real UR driver alike (only their ROS interfaces are
 `method` (constant_speed or seed1, overrides the job's), `compare` (bool: run the other method after it on the
 same job and put both beads side by side), `video` (bool: out_dir/run.mp4), `dispense` (bool: switch the glue
 gun on the job's output), `measure_part` (bool, default true: read the cell's part scanners on ur_sim/part_scan,
-fit the part and move the bead onto it; without scanners the job runs on the nominal glass). The report:
+fit the part and move the bead onto it; without scanners the job runs on the nominal glass), `pace_topic` (a
+ur_sim started with the same `pace_topic` runs in step with this client, so the gun's switches land where planned
+however loaded the machine is; `make parts` runs so). The report:
 out_dir/index.html gathers the video, the bead targets and every figure; the run itself is recorded in
 out_dir/bag/ (rosbag2, MCAP: execution/bag_recorder.py).
 Exit codes: 0 success, 2 invalid job, 3 no server or joint states, 4 planning failed, 5 execution failed,
@@ -90,7 +92,10 @@ def run_job(params: dict, stop: threading.Event, context=None) -> int:
         return 3
     try:
         prefix = '/' + namespace.strip('/') if namespace.strip('/') else ''
-        gun = dispenser_for(ur.node, prefix, controller) if params.get('dispense', True) else None
+        pace_topic = params.get('pace_topic') or None
+        gun = dispenser_for(ur.node, prefix, controller, pace_topic) if params.get('dispense', True) else None
+        if gun is not None and pace_topic is not None:
+            ur.on_joint_state(lambda sample: gun.robot_time(sample.t))  # the robot's time while no goal runs
         if gun is not None and not gun.available(timeout=5.0):
             print(f'ur_glue_planner: no {SET_IO} service: running without switching the dispenser', flush=True)
             gun = None
