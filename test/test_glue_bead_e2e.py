@@ -11,10 +11,10 @@ import pytest
 from sim_harness import running_sim, yaml_params
 
 from ur_glue_planner.execution.node import run_job
+from ur_glue_planner.parts.runner import PACE_TOPIC
 from ur_sim_driver.description.scene import config_dir
 
 V = 0.15
-PACE_TOPIC = '/ur_sim/pace'
 # Two whole glue jobs in real time (2 x 23.6 s of motion), their reports and the video are the `demo` fixture, set up
 # in whichever test of this module runs first: 90 s on an idle 2-core machine, and the motion cannot go faster.
 # Twice the default timeout (pytest.ini), for a loaded machine.
