@@ -71,8 +71,8 @@ class DispenserIO:
         robot_scaling: Topic of the robot's speed scaling in percent (std_msgs/Float64) that the controller advances
             by, or None: the controller_state's own factor.
         pace_topic: Keep a ur_sim started with this pace_topic in step with the client, or None. Paced, the gun
-            needs the robot's time while no goal is armed: feed :meth:`robot_time` every joint state's stamp (from
-            the client's own subscription, :meth:`URClient.on_joint_state`: one subscription serves both).
+            needs the robot's time while no goal is armed: :meth:`follow_joint_states` feeds :meth:`robot_time`
+            every joint state's stamp from the client's own subscription (one subscription serves both).
     The controller's period is taken from the stamps of consecutive state messages: an event is due half a
     period early, so that the call lands in the cycle nearest to its time (within half a period: 1 ms at
     500 Hz, 4 ms at 125 Hz, plus the service's delivery).
@@ -173,6 +173,11 @@ class DispenserIO:
         if self._clock is None:
             self._publish_pace()
 
+    def follow_joint_states(self, on_joint_state) -> None:
+        """Paced: take the robot's time from every joint state the client receives; `on_joint_state` registers a
+        listener on the client's one subscription (:meth:`URClient.on_joint_state`)."""
+        on_joint_state(lambda sample: self.robot_time(sample.t))
+
     def _publish_pace(self) -> None:
         """Tell a paced ur_sim how far it may run: ``FREE_AHEAD`` past the newest robot time this client handled
         (controller state while a goal is armed, else joint state), but not past the earliest robot time of the next
@@ -238,7 +243,7 @@ class DispenserIO:
 
 def dispenser_for(node: Node, prefix: str, controller: str, pace_topic: str | None = None) -> DispenserIO:
     """The gun switched on the clock of trajectory controller `controller` under namespace `prefix` ('' or '/ns');
-    `pace_topic`: keep a ur_sim started with that pace_topic in step with it (feed it
-    :meth:`DispenserIO.robot_time`)."""
+    `pace_topic`: keep a ur_sim started with that pace_topic in step with it (then call
+    :meth:`DispenserIO.follow_joint_states`)."""
     robot = None if controller == PLAIN_CONTROLLER else f'{prefix}/speed_scaling_state_broadcaster/speed_scaling'
     return DispenserIO(node, f'{prefix}/{controller}/controller_state', robot, pace_topic)

@@ -95,7 +95,7 @@ def run_job(params: dict, stop: threading.Event, context=None) -> int:
         pace_topic = params.get('pace_topic') or None
         gun = dispenser_for(ur.node, prefix, controller, pace_topic) if params.get('dispense', True) else None
         if gun is not None and pace_topic is not None:
-            ur.on_joint_state(lambda sample: gun.robot_time(sample.t))  # the robot's time while no goal runs
+            gun.follow_joint_states(ur.on_joint_state)
         if gun is not None and not gun.available(timeout=5.0):
             print(f'ur_glue_planner: no {SET_IO} service: running without switching the dispenser', flush=True)
             gun = None

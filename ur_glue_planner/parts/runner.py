@@ -168,7 +168,7 @@ def run_part(config: PartsRun, index: int, nominal_plan: GluePlan, stop: threadi
                           node_name='ur_glue_parts')
             try:
                 gun = dispenser_for(ur.node, '', job.controller_name, pace_topic=PACE_TOPIC)
-                ur.on_joint_state(lambda sample: gun.robot_time(sample.t))  # the robot's time while no goal runs
+                gun.follow_joint_states(ur.on_joint_state)
                 bead = BeadListener(ur.node)
                 if not (gun.available(timeout=STARTUP_TIMEOUT) and bead.available(timeout=STARTUP_TIMEOUT)):
                     raise ClientError('ur_sim has no set_io or no glue bead service')
