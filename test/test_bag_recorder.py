@@ -179,6 +179,31 @@ def test_a_recording_over_dds_reads_back_with_the_mcap_library(tmp_path):
     assert io_msg.digital_out_states[0].state
 
 
+def test_what_arrived_before_the_first_clock_is_written_when_the_clock_comes(tmp_path):
+    # DDS orders each topic, not the topics between them: the first clock may be the last message taken
+    with ros_context() as context:
+        driver = Node('fake_driver', context=context)
+        try:
+            clock = driver.create_publisher(Clock, '/clock', 10)
+            states = driver.create_publisher(JointState, 'joint_states', 10)
+            recorder = rec.BagRecorder(context, tmp_path / 'bag', log=lambda _: None).start(first_message_timeout=0.0)
+            try:
+                _wait(lambda: min(p.get_subscription_count() for p in (clock, states)) > 0, what='matching')
+                for k in range(3):
+                    states.publish(JointState(name=['shoulder_pan_joint'], position=[0.1 * k]))
+                _wait(lambda: recorder.held == 3, what='the joint states held for the clock')
+                assert recorder.counts == {}
+                clock.publish(Clock(clock=Time(sec=7)))
+                _wait(lambda: recorder.counts.get('/joint_states', 0) == 3, what='the held joint states written')
+                assert recorder.held == 0
+            finally:
+                recorder.close()
+        finally:
+            driver.destroy_node()
+    bag = _read(tmp_path / 'bag' / 'bag.mcap')
+    assert [m[1] for m in bag['/joint_states']] == [7_000_000_000] * 3
+
+
 def test_a_run_that_cannot_record_goes_on_and_says_why(tmp_path):
     taken = tmp_path / 'bag'
     taken.write_text('not a directory')

@@ -200,30 +200,44 @@ class BagRecorder:
         self._log(f'bag: recording to {self.path} ({"simulated" if self._sim_time else "wall"} clock)')
         return self
 
+    @property
+    def held(self) -> int:
+        """Messages received but not yet written: they wait for the first /clock to take its time."""
+        return len(self._pending)
+
     def _on_clock(self, data: bytes) -> None:
         t = clock_ns(data)
         if self._clock is None or t > self._clock:
             self._clock = t
         if self._joint_state_seen:
             self._first.set()
+        # What waited for the first clock is written now, not with the next message: DDS keeps each topic's
+        # order but not the order across topics, so the first clock can be taken after the last message.
+        if self._pending and self.error is None:
+            self._guarded(self._flush, self._clock)
 
     def _on_message(self, topic: RecordedTopic, data: bytes) -> None:
-        if self.error is not None:
-            return
+        if self.error is None:
+            self._guarded(self._record, topic, data)
+
+    def _guarded(self, write: Callable[..., None], *args) -> None:
         try:
-            if not self._joint_state_seen and topic.name == f'{self.prefix}/joint_states':
-                self._joint_state_seen = True
-                if not self._sim_time or self._clock is not None:
-                    self._first.set()
-            t = self._clock if self._sim_time else time.time_ns()
-            if t is None:
-                self._pending.append((topic, data))
-                return
-            self._flush(t)
-            self._write(topic, t, data)
+            write(*args)
         except Exception as exc:  # noqa: BLE001 - a bag that cannot be written must not stop the run
             self.error = f'{type(exc).__name__}: {exc}'
             self._log(f'bag: recording stopped: {self.error}')
+
+    def _record(self, topic: RecordedTopic, data: bytes) -> None:
+        if not self._joint_state_seen and topic.name == f'{self.prefix}/joint_states':
+            self._joint_state_seen = True
+            if not self._sim_time or self._clock is not None:
+                self._first.set()
+        t = self._clock if self._sim_time else time.time_ns()
+        if t is None:
+            self._pending.append((topic, data))
+            return
+        self._flush(t)
+        self._write(topic, t, data)
 
     def _flush(self, t: int) -> None:
         pending, self._pending = self._pending, []
