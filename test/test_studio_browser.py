@@ -283,7 +283,9 @@ def test_a_new_plan_clears_the_executed_path(studio, page):
     _tab(page, 'Plan')
     page.get_by_role('button', name='Plan', exact=True).click()
     wait_until(lambda: studio.plan is not None and studio.plan is not old, 'the new plan', timeout=120)
-    assert studio.live_view.pieces_drawn == 0 and studio.live_view.trail == []
+    # The page loop may have begun the next path already: at most the tip where the arm rests, which draws nothing
+    with studio._lock:
+        assert studio.live_view.pieces_drawn == 0 and len(studio.live_view.trail) <= 1
     wp = studio.teach.current()  # and the IK robot at the selected waypoint, not the plan's start
     wait_until(lambda: np.allclose(studio._model_view.frames['dispenser_tip'].position, wp.position, atol=1e-6),
                'the IK robot at the selected waypoint')
