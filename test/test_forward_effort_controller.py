@@ -99,8 +99,8 @@ def test_torques_move_the_arm_as_far_as_the_friction_compensation_lets_them(robo
     assert moved[5] > 0.005 and np.abs(moved[:5]).max() < 1e-3
     # Deactivated: the torques are gone and the robot brakes as the driver's program does (stopj at 4 rad/s^2),
     # holding where it comes to rest.
+    rec = h.record()  # a first recording steps the arm on until its subscription has matched: the speed after it
     speed = h.sim.sim.state().qd[5]
-    rec = h.record()
     assert h.cm.switch(deactivate=[FEC]).ok
     rest = round(0.1 / h.sim.sim.control_dt)  # 0.1 s of cycles reporting exactly 0: at rest, not passing through 0
     wait_for(lambda: len(rec.qd) > rest and not np.any(rec.qd[-rest:]), timeout=2.0 * speed / 4.0 + 0.3,

@@ -38,8 +38,11 @@ dashboard.play()
 out['playing'] = dashboard.running()
 io = rtde_io.RTDEIOInterface(host)
 out['slider'] = io.setSpeedSlider(0.5)
-t = receive.getTimestamp()
-while receive.getTimestamp() < t + 0.01:
+# RTDE inputs have no answer: the slider shows once the robot has taken the package (deadline: 2 s of robot
+# time; 30 s of wall time guards against a stream that stops)
+t, hang = receive.getTimestamp(), time.monotonic() + 30.0
+while abs(receive.getTargetSpeedFraction() - 0.5) > 1e-9 and receive.getTimestamp() < t + 2.0 \
+        and time.monotonic() < hang:
     time.sleep(0.001)
 out['slider_read'] = receive.getTargetSpeedFraction()
 io.setSpeedSlider(1.0)
