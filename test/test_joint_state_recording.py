@@ -70,3 +70,21 @@ def test_nothing_recorded_is_an_error_not_an_empty_recording():
         JointStateRecorder(50.0).resample()
     with pytest.raises(ClientError, match='no joint states were received while recording'):
         JointStateRecorder(50.0).raw()
+
+
+class _ArrivingDuringRead(list):
+    """Samples to which the spinning thread appends one more message once they have been read through once."""
+
+    def __iter__(self):
+        yield from list.__iter__(self)
+        if len(self) == 3:
+            self.append(_sample(0.024, 3.0))
+
+
+@pytest.mark.parametrize('read', ['raw', 'resample'])
+def test_a_message_arriving_while_the_recording_is_read_does_not_tear_it(read):
+    recorder = JointStateRecorder(125.0)
+    recorder.samples = _ArrivingDuringRead(_sample(0.008 * k, float(k)) for k in range(3))
+    rec = getattr(recorder, read)()
+    assert len(rec.t) == len(rec.q) == len(rec.qd) == len(rec.effort) == 3
+    assert rec.q[:, 0].tolist() == [0.0, 1.0, 2.0]

@@ -53,20 +53,26 @@ class JointStateRecorder:
         """Message time covered so far from the start [s]."""
         return self.samples[-1].t - self.start() if self.samples else 0.0
 
+    def _taken(self) -> list[JointStateSample]:
+        """The samples so far, copied once: the spinning thread may append one while they are read (stopped, a
+        recorder can still get the message its thread was handing out), and t, q, qd and effort must agree."""
+        samples = list(self.samples)
+        if not samples:
+            raise ClientError('no joint states were received while recording')
+        return samples
+
     def raw(self) -> Recording:
         """Every message received, t relative to the start [s] (messages before the start included, t < 0)."""
-        if not self.samples:
-            raise ClientError('no joint states were received while recording')
+        samples = self._taken()
         t0 = self.start()
-        return Recording(np.array([s.t - t0 for s in self.samples]), np.array([s.q for s in self.samples]),
-                         np.array([s.qd for s in self.samples]), np.array([s.effort for s in self.samples]))
+        return Recording(np.array([s.t - t0 for s in samples]), np.array([s.q for s in samples]),
+                         np.array([s.qd for s in samples]), np.array([s.effort for s in samples]))
 
     def resample(self, duration: float | None = None) -> Recording:
         """Samples at start + k / rate, k < duration x rate (the seed's N = tf x rate): for each, the newest
         message at or before that time."""
-        if not self.samples:
-            raise ClientError('no joint states were received while recording')
-        stamps = np.array([s.t for s in self.samples])
+        samples = self._taken()
+        stamps = np.array([s.t for s in samples])
         t0 = self.start()
         covered = int(np.floor((stamps[-1] - t0 + STAMP_TIE) * self.rate)) + 1
         if covered <= 0:
@@ -75,6 +81,6 @@ class JointStateRecorder:
         count = covered if duration is None else min(covered, round(duration * self.rate))
         grid = np.arange(count) / self.rate
         picks = np.maximum(np.searchsorted(stamps, t0 + grid + STAMP_TIE, side='right') - 1, 0)
-        chosen = [self.samples[i] for i in picks]
+        chosen = [samples[i] for i in picks]
         return Recording(grid, np.array([s.q for s in chosen]), np.array([s.qd for s in chosen]),
                          np.array([s.effort for s in chosen]))
