@@ -34,6 +34,7 @@ from ur_sim_driver.controllers.base import destroy_node
 from ur_sim_driver.controllers.joint_trajectory import SPEED_SCALING_QOS
 from ur_sim_driver.robot.io_bank import SPAN
 from ur_sim_driver.robot.robot_state import PROTECTIVE_STOP, RUNNING
+from ur_sim_driver.ros.main import make_executors
 from ur_sim_driver.ros.node import UrSimNode
 from ur_sim_driver.spin_thread import SpinThread
 
@@ -735,11 +736,13 @@ def running_sim(lockstep: bool | None = None, paced: bool = False, ros_args: lis
         sim = UrSimNode(context=ctx, parameter_overrides=[_param(k, v) for k, v in _flatten(params).items()],
                         start=not (lockstep or paced))
         client = Node('test_client', context=ctx)
-        executor = MultiThreadedExecutor(num_threads=4, context=ctx)
-        for node in sim.nodes():
-            executor.add_node(node)
-        executor.add_node(client)
-        spinner = SpinThread(executor, 'test_executor').start()
+        # ur_sim's nodes on the executors its executable gives them (main.make_executors: one of them walks some
+        # 200 entities at every wake); the client on its own, woken only by its own answers and messages.
+        executors = make_executors(sim)
+        client_executor = MultiThreadedExecutor(num_threads=4, context=ctx)
+        client_executor.add_node(client)
+        executors.append(client_executor)
+        spinners = [SpinThread(e, f'test_executor_{i}').start() for i, e in enumerate(executors)]
         harness = None
         if lockstep:
             _lockstep.append(Lockstep(sim))
@@ -759,7 +762,8 @@ def running_sim(lockstep: bool | None = None, paced: bool = False, ros_args: lis
                 teardown.callback(rclpy.try_shutdown, context=ctx)
                 teardown.callback(sim.destroy_node)
                 teardown.callback(destroy_node, client)
-                teardown.callback(spinner.stop)
+                for spinner in spinners:
+                    teardown.callback(spinner.stop)
                 teardown.callback(sim.shutdown)
                 if pacer is not None:
                     teardown.callback(pacer.stop)

@@ -24,7 +24,7 @@ pytestmark = pytest.mark.timeout(600)
 @pytest.fixture(scope='module')
 def demo(tmp_path_factory):
     params = yaml_params(config_dir() / 'ur_sim_windshield.yaml')
-    params['real_time_factor'] = 1.0
+    params['real_time_factor'] = 0.0
     params['pace_topic'] = PACE_TOPIC
     out = tmp_path_factory.mktemp('glue_job')
     with running_sim(**params) as h:

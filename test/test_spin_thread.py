@@ -9,6 +9,7 @@ from ros_helpers import ros_context
 from sim_harness import wait_for
 from std_msgs.msg import Int32
 
+from ur_sim_driver import spin_thread
 from ur_sim_driver.spin_thread import SpinThread
 
 # An exception in the spin thread (the race this class exists to avoid) fails the test.
@@ -91,4 +92,23 @@ def test_pace_rests_after_each_callback_and_stop_cuts_a_rest_short():
         # One callback per rest: the thread rests after every callback, and never runs ahead of its pace.
         assert len(ticks) == 5 and len(rests) == 5
         assert spinner.stop(timeout=2.0)  # the hour-long rest ends at once
+        node.destroy_node()
+
+
+@pytest.mark.parametrize('executor_cls', [SingleThreadedExecutor, MultiThreadedExecutor])
+def test_stop_ends_a_wait_that_nothing_else_would_end(executor_cls, monkeypatch):
+    """rclpy's wake() lets a spin_once with nothing to run wait on until its timeout: stop() must end it itself
+    (here the timeout is an hour, the join's deadline a minute)."""
+    monkeypatch.setattr(spin_thread, 'WAKE_PERIOD', 3600.0)
+    with ros_context() as ctx:
+        node = Node('spin_thread_idle', context=ctx)
+        executor = executor_cls(context=ctx)
+        executor.add_node(node)
+        ran = threading.Event()
+        once = node.create_guard_condition(ran.set)
+        spinner = SpinThread(executor).start()
+        once.trigger()
+        assert ran.wait(60.0)  # the thread has run a callback and waits again, with nothing left to run
+        assert spinner.stop(timeout=60.0)
+        assert not spinner.running
         node.destroy_node()

@@ -10,12 +10,16 @@ from __future__ import annotations
 import io
 import sys
 import threading
+import time
 from collections.abc import Callable
 
 from rclpy.executors import Executor, ExternalShutdownException
 from rclpy.experimental import EventsExecutor
 
-WAKE_PERIOD = 1.0  # [s] longest wait of one spin_once; stop() wakes the executor at once anyway
+WAKE_PERIOD = 1.0  # [s] longest wait of one spin_once; stop() ends it at once with a guard condition
+# [s] the same for rclpy's EventsExecutor, which takes no guard condition and whose wake() does not end a wait: its
+# wait costs no wait set, so a short one is cheap, and stop() returns within it.
+EVENTS_WAKE_PERIOD = 0.05
 
 
 class SpinThread:
@@ -32,16 +36,24 @@ class SpinThread:
         self._pace = pace
         self._stop = threading.Event()
         self._thread = threading.Thread(target=self._run, name=name, daemon=True)
+        self._wake = None  # (node, guard condition) that stop() triggers
 
     def start(self) -> SpinThread:
+        # rclpy's Executor.wake() only makes a waiting spin_once look again: with nothing to run it waits on until
+        # its timeout (measured: stop() took the rest of WAKE_PERIOD, 0.5 s on average). A guard condition whose
+        # callback runs ends that spin_once at once.
+        nodes = self.executor.get_nodes()
+        if nodes and isinstance(self.executor, Executor):  # rclpy's own executors (the EventsExecutor is not)
+            self._wake = (nodes[0], nodes[0].create_guard_condition(lambda: None))
         self._thread.start()
         return self
 
     def _run(self) -> None:
         executor, context, pace = self.executor, self.executor.context, self._pace
         try:
+            period = WAKE_PERIOD if isinstance(executor, Executor) else EVENTS_WAKE_PERIOD
             while not self._stop.is_set() and context.ok():
-                executor.spin_once(timeout_sec=WAKE_PERIOD)
+                executor.spin_once(timeout_sec=period)
                 if pace is not None:
                     rest = pace()
                     if rest > 0.0:
@@ -64,14 +76,33 @@ class SpinThread:
         self._stop.set()
         if self._thread.is_alive():
             try:
-                self.executor.wake()
-            except Exception:  # noqa: BLE001 -- already shut down: the loop ends on its own
+                if self._wake is not None:
+                    self._wake[1].trigger()
+                else:
+                    self.executor.wake()
+            except Exception:  # noqa: BLE001 -- already shut down or destroyed: the loop ends on its own
                 pass
             self._thread.join(timeout)
         if self._thread.is_alive():
             return False
+        self._wait_for_pool(time.monotonic() + timeout)
         self.executor.shutdown(timeout_sec=timeout)
+        if self._wake is not None:  # after the executor, which may still hold it among the entities it last saw
+            node, guard = self._wake
+            self._wake = None
+            try:
+                node.destroy_guard_condition(guard)
+            except Exception:  # noqa: BLE001 -- the node was destroyed first, and its guard conditions with it
+                pass
         return True
+
+    def _wait_for_pool(self, deadline: float) -> None:
+        """Until the callbacks that a MultiThreadedExecutor handed its thread pool (the guard's among them) have
+        run, or `deadline` (monotonic [s]): its shutdown() skips that wait through the same flag as above, and a
+        callback finishing after it fails on the executor's destroyed guard condition ("never retrieved")."""
+        for task in list(getattr(self.executor, '_futures', ())):
+            while not task.done() and time.monotonic() < deadline:
+                time.sleep(0.001)  # a shutdown path: a callback's end has no event to wait on
 
 
 def events_executor(context) -> Executor:

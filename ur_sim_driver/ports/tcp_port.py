@@ -57,6 +57,16 @@ class TcpPort:
         self._thread.join(timeout=5.0)
 
 
+def close_all(ports: list) -> None:
+    """Close `ports` (the robot's ports, each built on a TcpPort) side by side: each waits up to its poll interval
+    (0.1 s) for its listening thread to notice."""
+    closers = [threading.Thread(target=port.close, name='close_port') for port in ports]
+    for closer in closers:
+        closer.start()
+    for closer in closers:
+        closer.join()
+
+
 def configure(sock: socket.socket) -> None:
     """A bounded send buffer, no Nagle delay (a package per send), keepalive probes and a user timeout (where the
     system has them)."""

@@ -51,7 +51,7 @@ from ur_sim_driver.physics.physics import ArmState
 from ur_sim_driver.ports.dashboard_port import DashboardPort
 from ur_sim_driver.ports.primary_port import REALTIME, SECONDARY, PrimaryPort
 from ur_sim_driver.ports.rtde_port import RtdePort
-from ur_sim_driver.ports.tcp_port import PortError
+from ur_sim_driver.ports.tcp_port import PortError, close_all
 from ur_sim_driver.robot.dashboard_server import DashboardServer
 from ur_sim_driver.robot.direct_torque import STOPJ_DECELERATION
 from ur_sim_driver.robot.encoders import reported_velocity
@@ -373,9 +373,7 @@ class UrSimNode(Node):
     def shutdown(self) -> None:
         """Stop the simulation loop and the controller's interface process, and wait for both."""
         self.loop.stop()
-        for port in (self.dashboard_port, self.rtde_port, *self.primary_ports):
-            if port is not None:
-                port.close()
+        close_all([port for port in (self.dashboard_port, self.rtde_port, *self.primary_ports) if port is not None])
         self.gateway.close()
 
     def destroy_node(self) -> None:
