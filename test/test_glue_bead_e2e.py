@@ -1,8 +1,9 @@
-"""The glue demo end to end on a real-time ur_sim with the windshield and the dispenser: our planner, then seed 1's
-method on the same job; the gun switched through set_io, the simulated bead judged, bead figures side by side, the
-video and the HTML page. Real time, because the gun's switching is judged against the simulated clock; in step with
-the planner (pace_topic), so that a loaded machine's set_io delivery does not move a switch on the robot's clock
-(free-running, a gun-on delivered late under load once cost seed 1 its start blob)."""
+"""The glue demo end to end on ur_sim with the windshield and the dispenser: our planner, then seed 1's method on the
+same job; the gun switched through set_io, the simulated bead judged, bead figures side by side, the video and the
+HTML page. In step with the planner (pace_topic), as fast as it follows (real_time_factor 0, as `make parts` runs):
+the gun's switching is judged against the simulated clock, and a loaded machine's set_io delivery does not move a
+switch on it (free-running, a gun-on delivered late under load once cost seed 1 its start blob). Free-running:
+test_planner_node; at real time: `make demo`."""
 import json
 import threading
 
@@ -15,9 +16,9 @@ from ur_glue_planner.parts.runner import PACE_TOPIC
 from ur_sim_driver.description.scene import config_dir
 
 V = 0.15
-# Two whole glue jobs in real time (2 x 23.6 s of motion), their reports and the video are the `demo` fixture, set up
-# in whichever test of this module runs first: 90 s on an idle 2-core machine, and the motion cannot go faster.
-# Twice the default timeout (pytest.ini), for a loaded machine.
+# Two whole glue jobs (2 x 23.6 s of motion), their reports and the video are the `demo` fixture, set up in whichever
+# test of this module runs first: 70 s on an idle 2-core machine. Twice the default timeout (pytest.ini), for a
+# loaded machine.
 pytestmark = pytest.mark.timeout(600)
 
 
