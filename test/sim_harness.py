@@ -110,8 +110,11 @@ class Pacer:
 
     LAG = 0.01  # [s] of robot time a followed client may lag: 5 cycles, under its joint-state queue of 10
 
-    def __init__(self, node: UrSimNode) -> None:
+    def __init__(self, node: UrSimNode, speed: float = 1.0) -> None:
+        """`speed`: robot seconds per wall second; 0 steps as fast as the followed clients take the robot's time
+        (for a client whose every wait is on robot time, its wall-clock deadlines only guards against a hang)."""
         self.node = node
+        self.speed = speed
         self._holds = 0
         self._lock = threading.Lock()
         self._views: list = []  # callables giving a client's newest robot time [s]
@@ -160,7 +163,9 @@ class Pacer:
                 next_wall = time.perf_counter()  # robot time resumes at the wall clock's pace, without a burst
                 continue
             self.node.step_once()
-            next_wall += dt
+            if not self.speed:
+                continue
+            next_wall += dt / self.speed
             delay = next_wall - time.perf_counter()
             if delay > 0.0:
                 time.sleep(delay)
@@ -710,13 +715,14 @@ def yaml_params(path) -> dict:
 
 @contextmanager
 def running_sim(lockstep: bool | None = None, paced: bool = False, ros_args: list[str] | None = None,
-                **params) -> Iterator[SimHarness]:
+                pace_speed: float = 1.0, **params) -> Iterator[SimHarness]:
     """ur_sim with a client, on a private context.
 
     By default in lockstep (:class:`Lockstep`): the simulation advances only while the test waits for something
-    the robot does. `paced`: stepped at real time's pace but held still during delivery (:class:`Pacer`), for
-    clients that wait on the wall clock. With `real_time_factor` given (the wall clock is the subject) it runs
-    free, paced to the wall clock; `lockstep=False` runs it free and as fast as possible.
+    the robot does. `paced`: stepped at real time's pace (`pace_speed` times it; 0: as fast as the followed clients
+    take it) but held still during delivery (:class:`Pacer`), for clients that wait on the wall clock. With
+    `real_time_factor` given (the wall clock is the subject) it runs free, paced to the wall clock; `lockstep=False`
+    runs it free and as fast as possible.
     """
     if paced:
         lockstep = False
@@ -746,7 +752,7 @@ def running_sim(lockstep: bool | None = None, paced: bool = False, ros_args: lis
         harness = None
         if lockstep:
             _lockstep.append(Lockstep(sim))
-        pacer = Pacer(sim).start() if paced else None
+        pacer = Pacer(sim, pace_speed).start() if paced else None
         if pacer is not None:
             _paced.append(pacer)
         try:
