@@ -77,7 +77,7 @@ def test_without_a_job_the_studio_is_a_live_viewer(browser):
         wait_until(lambda: _status(page) == ('waiting', 'waiting for /live/joint_states and /live/robot_description'),
                    'the page to say it waits for the robot')
         sim = _ur_sim_process()
-        wait_until(lambda: viewer.live_view.view is not None and viewer.live_updates > 10, 'the live robot')
+        wait_until(lambda: viewer.live_view.view is not None and viewer.live_updates > 0, 'the live robot')
         wait_until(lambda: _status(page)[0] == 'live', 'the page to say the robot is live')
         assert viewer.sjob is None
         set_camera(client, (1.2, -1.0, 1.0), (0.0, 0.3, 0.4))

@@ -20,6 +20,7 @@ from ur_glue_planner.studio.robot_status import robot_status
 from ur_glue_planner.studio.ros_link import LiveRobot
 
 TRAIL_STEP = 5e-4  # [m] a new tip path point once the tip has moved this far
+POSE_STEP = 1e-6  # [rad] a joint that moved less than this since the pose last sent: not sent again (invisible)
 
 
 class LiveView:
@@ -43,6 +44,7 @@ class LiveView:
         self.bead_points_drawn = 0  # deposit points of the simulated bead shown in the page
         self._urdf: str | None = None
         self._stamp = None
+        self._shown: tuple | None = None  # (names, q) of the pose last sent to the page
         self._trail_drawn = 0
         self._pieces: list = []
         self._bead_count = 0
@@ -56,14 +58,21 @@ class LiveView:
                 self.view.remove()
             self._urdf = urdf
             self.view = sv.RobotView(self.server, '/live', RobotModel(urdf))
+            self._shown = None
             self.tip_frame = tip_frame_of(urdf)
         state = self.live.state()
         if self.view is None or state is None or state.stamp == self._stamp:
             return
         self._stamp = state.stamp
+        self._draw_bead()
+        # A robot at rest still publishes every cycle: its pose goes to the page only when it moved (each pose
+        # sent makes every open page render the scene again).
+        if (self._shown is not None and self._shown[0] == state.names
+                and float(np.max(np.abs(np.asarray(state.q) - self._shown[1]))) <= POSE_STEP):
+            return
+        self._shown = (state.names, np.array(state.q))
         self.view.show(state.names, state.q)
         self.updates += 1
-        self._draw_bead()
         tip = self.view.robot.frame_position(self.tip_frame, state.names, state.q)
         if tip is not None and (not self.trail or np.linalg.norm(tip - self.trail[-1]) > TRAIL_STEP):
             self.trail.append(tip)

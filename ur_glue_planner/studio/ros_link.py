@@ -31,6 +31,8 @@ from ur_glue_planner.studio.run_client import StudioClient
 from ur_sim_driver.description.part_scan import from_cloud
 from ur_sim_driver.spin_thread import SpinThread
 
+READ_PERIOD = 1.0 / 60.0  # [s] rest of the ROS thread after each callback: the page shows at most 60 poses a second
+
 
 @dataclass(frozen=True)
 class LiveState:
@@ -84,7 +86,9 @@ class LiveRobot:
         self.node.create_subscription(PointCloud2, f'{self.prefix}/{SCAN_TOPIC}', self._on_scan, latched)
         self._executor = SingleThreadedExecutor(context=context)
         self._executor.add_node(self.node)
-        self._spinner = SpinThread(self._executor, 'studio_ros').start()
+        # Joint states come every control cycle (500 Hz) and the page shows at most 60 poses a second: the thread
+        # rests after each callback (the subscription keeps the newest; the bead and scan messages are whole).
+        self._spinner = SpinThread(self._executor, 'studio_ros', pace=lambda: READ_PERIOD).start()
         self._run_thread: threading.Thread | None = None
         self._stop = threading.Event()
         self.client: StudioClient | None = None  # the runs' connection, made by the first run
