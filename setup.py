@@ -1,4 +1,5 @@
-"""ament_python package ur_sim_driver: the simulator (ur_sim_driver) and the glue planner (ur_glue_planner)."""
+"""ament_python package ur_sim_driver: the simulator (ur_sim_driver), the glue planner (ur_glue_planner) and the
+ground they share (ur_common)."""
 from glob import glob
 
 from setuptools import find_packages, setup
@@ -8,7 +9,8 @@ PACKAGE = 'ur_sim_driver'
 setup(
     name=PACKAGE,
     version='0.1.0',
-    packages=find_packages(include=['ur_sim_driver', 'ur_sim_driver.*', 'ur_glue_planner', 'ur_glue_planner.*']),
+    packages=find_packages(include=['ur_sim_driver', 'ur_sim_driver.*', 'ur_glue_planner', 'ur_glue_planner.*',
+                                    'ur_common']),
     data_files=[
         ('share/ament_index/resource_index/packages', [f'resource/{PACKAGE}']),
         (f'share/{PACKAGE}', ['package.xml']),

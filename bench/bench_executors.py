@@ -19,10 +19,10 @@ from rclpy.node import Node
 from rclpy.parameter import Parameter
 from rosgraph_msgs.msg import Clock
 
+from ur_common.spin_thread import SpinThread
 from ur_sim_driver.ros.main import make_executors
 from ur_sim_driver.ros.node import UrSimNode
 from ur_sim_driver.ros.pace_gate import PACE_QOS
-from ur_sim_driver.spin_thread import SpinThread
 
 PACE_MESSAGES = 400
 PACE_RATE = 40.0  # [Hz] about what a glue run sends per second of robot time

@@ -20,7 +20,7 @@ from rclpy.qos import QoSProfile
 from trajectory_msgs.msg import JointTrajectory, JointTrajectoryPoint
 
 from bench.bench_sim import HOME, JOINTS, _Probe, _SimProcess, _wait
-from ur_sim_driver.action_client import ActionClient
+from ur_common.action_client import ActionClient
 from ur_sim_driver.controllers.joint_trajectory import SPEED_SCALING_QOS
 
 N = 100_000

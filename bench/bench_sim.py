@@ -33,14 +33,14 @@ from tf2_msgs.msg import TFMessage
 from trajectory_msgs.msg import JointTrajectoryPoint
 from ur_msgs.msg import IOStates, ToolDataMsg
 
-from ur_sim_driver.action_client import ActionClient
+from ur_common.action_client import ActionClient
+from ur_common.spin_thread import SpinThread
 from ur_sim_driver.motion.jtc import TrajectoryController
 from ur_sim_driver.motion.tolerances import default_tolerances
 from ur_sim_driver.motion.trajectory_types import TrajectoryCommand
 from ur_sim_driver.motion.validation import map_to_config_order
 from ur_sim_driver.robot.sim_config import sim_config_from_params
 from ur_sim_driver.robot.simulator import Simulator
-from ur_sim_driver.spin_thread import SpinThread
 
 RATE_WINDOW = float(os.environ.get('UR_SIM_BENCH_RATE_SECONDS', '5'))  # [s] of real-time /joint_states
 JOINTS = ['shoulder_pan_joint', 'shoulder_lift_joint', 'elbow_joint', 'wrist_1_joint', 'wrist_2_joint',

@@ -29,14 +29,14 @@ from trajectory_msgs.msg import JointTrajectory, JointTrajectoryPoint
 from ur_msgs.msg import Analog
 from ur_msgs.srv import SetAnalogOutput, SetIO, SetPayload, SetSpeedSliderFraction
 
-from ur_sim_driver.action_client import ActionClient
+from ur_common.action_client import ActionClient
+from ur_common.spin_thread import SpinThread
 from ur_sim_driver.controllers.base import destroy_node
 from ur_sim_driver.controllers.joint_trajectory import SPEED_SCALING_QOS
 from ur_sim_driver.robot.io_bank import SPAN
 from ur_sim_driver.robot.robot_state import PROTECTIVE_STOP, RUNNING
 from ur_sim_driver.ros.main import make_executors
 from ur_sim_driver.ros.node import UrSimNode
-from ur_sim_driver.spin_thread import SpinThread
 
 POSE_TOLERANCE = 1e-3  # [rad] a joint further than this from the remembered pose is moved back after a test
 SETTLED_SPEED = 1e-3  # [rad/s] every joint slower than this: the arm is back at rest

@@ -15,8 +15,8 @@ from ros_helpers import ros_context
 from sim_harness import wait_still
 from unique_identifier_msgs.msg import UUID
 
-from ur_sim_driver.action_client import ActionClient
-from ur_sim_driver.spin_thread import SpinThread
+from ur_common.action_client import ActionClient
+from ur_common.spin_thread import SpinThread
 
 HELD = 0.3  # [s] the server's executor starts this late: the client must wait for its answers
 

@@ -13,7 +13,7 @@ from rclpy.node import Node
 from ros_helpers import executor_with, ros_context, spin_until, spin_until_future
 from trajectory_msgs.msg import JointTrajectoryPoint, MultiDOFJointTrajectoryPoint
 
-from ur_sim_driver.action_client import ActionClient
+from ur_common.action_client import ActionClient
 from ur_sim_driver.gateway import goal_intake as intake_module
 from ur_sim_driver.gateway.goal_intake import ArrayGoalActionServer, Request, _pointer, goal_intake, intake_error
 from ur_sim_driver.motion import conversions as conv

@@ -1,6 +1,6 @@
 """The tree shows the layers: every import of ur_sim_driver by ur_sim_driver goes to the same layer or one below;
-ur_glue_planner stands on the shared ground only (the description and the top modules), never on the simulator's
-runtime; and neither package has an import cycle.
+ur_glue_planner stands on the shared ground only (ur_common and ur_sim_driver's description), never on the
+simulator's runtime; ur_common imports neither package; and no package has an import cycle.
 
 Read from the source with ``ast`` (every import statement, also inside functions and ``if TYPE_CHECKING``), so a
 lazy import cannot hide an upward dependency. The order is the one ``ur_sim_driver/__init__.py`` documents.
@@ -11,16 +11,18 @@ from pathlib import Path
 
 import pytest
 
+import ur_common
 import ur_glue_planner
 import ur_sim_driver
 
 # lowest first
 ORDER = ('description', 'physics', 'robot', 'motion', 'urscript', 'gateway', 'controllers', 'ports', 'ros')
 # the modules at the top: importable by all, importing nothing of ours
-BASE = ('errors', 'paths', 'spin_thread', 'action_client')
-SHARED = ('description',)  # the layers ur_glue_planner may import, besides BASE
+BASE = ('errors',)
+SHARED = ('description',)  # the layer of ur_sim_driver that ur_glue_planner may import (and ur_common)
 ROOT = Path(ur_sim_driver.__file__).parent
 PLANNER = Path(ur_glue_planner.__file__).parent
+COMMON = Path(ur_common.__file__).parent
 
 
 def _modules(root: Path = ROOT) -> list[Path]:
@@ -87,9 +89,16 @@ def test_every_layer_says_what_lives_there_and_what_it_may_import():
 def test_the_planner_imports_only_the_shared_ground(path):
     for line, module in _imports(path):
         first = module.split('.')[1]
-        assert first in BASE + SHARED, (f'ur_glue_planner/{path.relative_to(PLANNER)}:{line} imports {module}, '
-                                        f"the simulator's runtime; it may import ur_sim_driver's "
-                                        f'{", ".join(SHARED)} and {", ".join(BASE)}')
+        assert first in SHARED, (f'ur_glue_planner/{path.relative_to(PLANNER)}:{line} imports {module}, '
+                                 f"the simulator's runtime; it may import ur_sim_driver's {', '.join(SHARED)} "
+                                 'and ur_common')
+
+
+@pytest.mark.parametrize('path', _modules(COMMON), ids=lambda p: str(p.relative_to(COMMON)))
+def test_the_shared_ground_imports_neither_package(path):
+    for package in ('ur_sim_driver', 'ur_glue_planner'):
+        found = _imports(path, package)
+        assert not found, f'ur_common/{path.relative_to(COMMON)}:{found[0][0]} imports {found[0][1]}'
 
 
 def _module_name(path: Path, root: Path) -> str:
@@ -97,7 +106,7 @@ def _module_name(path: Path, root: Path) -> str:
     return '.'.join(parts[:-1] if parts[-1] == '__init__' else parts)
 
 
-@pytest.mark.parametrize('root', (ROOT, PLANNER), ids=lambda r: r.name)
+@pytest.mark.parametrize('root', (ROOT, PLANNER, COMMON), ids=lambda r: r.name)
 def test_no_import_cycle(root):
     names = {_module_name(p, root): p for p in _modules(root)}
     graph = {}

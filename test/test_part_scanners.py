@@ -10,12 +10,12 @@ from sensor_msgs.msg import PointCloud2
 from sim_harness import running_sim, wait_for
 from test_io_and_status import Latest
 
+from ur_common.paths import config_dir
 from ur_glue_planner.scene.scanner_layout import INSIDE, OUTSIDE, POINTS, STANDOFF, scanner_layout
 from ur_glue_planner.scene.windshield import DEFAULT_WINDSHIELD
 from ur_sim_driver.description.part_scan import from_cloud, parse_scanners, to_cloud
 from ur_sim_driver.description.scene import read_scene
 from ur_sim_driver.errors import ConfigError
-from ur_sim_driver.paths import config_dir
 from ur_sim_driver.physics.ray_scan import PartRays, measure
 
 HOME = [0.0, -math.pi / 2, 0.0, -math.pi / 2, 0.0, 0.0]

@@ -12,7 +12,7 @@ from control_msgs.action import FollowJointTrajectory
 from rclpy.callback_groups import ReentrantCallbackGroup
 from sim_harness import point, ready_action, running_sim
 
-from ur_sim_driver.action_client import ActionClient
+from ur_common.action_client import ActionClient
 from ur_sim_driver.motion import result_codes as rc
 
 NAME = 'passthrough_trajectory_controller'

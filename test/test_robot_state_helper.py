@@ -7,7 +7,7 @@ from action_msgs.srv import CancelGoal
 from sim_harness import running_sim, wait_answer, wait_for, wait_still
 from ur_dashboard_msgs.action import SetMode
 
-from ur_sim_driver.action_client import ActionClient  # rclpy's loses a fast goal response
+from ur_common.action_client import ActionClient  # rclpy's loses a fast goal response
 from ur_sim_driver.robot.robot_state import IDLE, NORMAL, POWER_OFF, POWER_ON, RUNNING
 
 REACHED = 'Reached target robot mode.'

@@ -8,7 +8,7 @@ from ros_helpers import executor_with, ros_context, spin_until, spin_until_futur
 from sensor_msgs.msg import JointState
 from trajectory_msgs.msg import JointTrajectoryPoint
 
-from ur_sim_driver.action_client import ActionClient
+from ur_common.action_client import ActionClient
 
 TIMEOUT = 20.0  # [s] generous: discovery on a loaded 2-core CI machine
 

@@ -8,9 +8,9 @@ from ros_helpers import ros_context
 from sim_harness import wait_for
 from std_srvs.srv import Trigger
 
+from ur_common.spin_thread import SpinThread
 from ur_glue_planner.errors import ClientError
 from ur_glue_planner.execution.service_call import call_idempotent
-from ur_sim_driver.spin_thread import SpinThread
 
 
 def test_the_first_answer_is_returned_and_unanswered_requests_are_sent_again():

@@ -9,8 +9,8 @@ from ros_helpers import ros_context
 from sim_harness import wait_for
 from std_msgs.msg import Int32
 
-from ur_sim_driver import spin_thread
-from ur_sim_driver.spin_thread import SpinThread
+from ur_common import spin_thread
+from ur_common.spin_thread import SpinThread
 
 # An exception in the spin thread (the race this class exists to avoid) fails the test.
 pytestmark = pytest.mark.filterwarnings('error::pytest.PytestUnhandledThreadExceptionWarning')

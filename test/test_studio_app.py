@@ -4,10 +4,10 @@ import pytest
 import yaml
 from studio_browser import free_port, wait_until
 
+from ur_common.paths import config_dir
 from ur_glue_planner.orientation import rotation_from_zyx_euler
 from ur_glue_planner.studio import scene_view as sv
 from ur_glue_planner.studio.app import Studio
-from ur_sim_driver.paths import config_dir
 
 
 @pytest.fixture(scope='module')

@@ -32,12 +32,12 @@ from studio_browser import (
     wait_until,
 )
 
+from ur_common.paths import config_dir
 from ur_glue_planner.execution.client import delivery_margin
 from ur_glue_planner.execution.run import BEAD_DELIVERY
 from ur_glue_planner.studio.app import INITIAL_CAMERA, Studio
 from ur_glue_planner.studio.ros_link import LiveRobot
 from ur_glue_planner.studio.run_client import NODE_NAME, bead_margin
-from ur_sim_driver.paths import config_dir
 
 JOB = config_dir() / 'glue_job.yaml'
 RTF = 1.0

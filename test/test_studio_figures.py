@@ -2,11 +2,11 @@
 import numpy as np
 import pytest
 
+from ur_common.paths import config_dir
 from ur_glue_planner.job import load_job
 from ur_glue_planner.motion.plan import plan_job
 from ur_glue_planner.studio.figures import FIGURES, bead_window, plan_figures, speed_summary
 from ur_glue_planner.studio.playback import Timeline
-from ur_sim_driver.paths import config_dir
 
 
 def test_four_non_blank_figures_and_the_speed_text():

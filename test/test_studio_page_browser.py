@@ -12,9 +12,9 @@ import numpy as np
 import pytest
 from studio_browser import free_port, launched_chromium, open_page, screenshot, set_camera, wait_until
 
+from ur_common.paths import config_dir
 from ur_glue_planner.studio.app import INITIAL_CAMERA, Studio
 from ur_glue_planner.studio.messages import SHOWN
-from ur_sim_driver.paths import config_dir
 
 JOB = config_dir() / 'glue_job.yaml'
 FRAMES_HELD = 15  # animation frames an arrow key is held: a tap of a quarter second at 60 frames a second

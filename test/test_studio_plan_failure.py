@@ -2,6 +2,7 @@
 import numpy as np
 import pytest
 
+from ur_common.paths import config_dir
 from ur_glue_planner.errors import PlanningError
 from ur_glue_planner.motion.plan import plan_job
 from ur_glue_planner.motion.ur_arm_kinematics import ur_kinematics
@@ -12,7 +13,6 @@ from ur_glue_planner.studio.reach import GlassCollision, Reach, ReachResult, way
 from ur_glue_planner.studio.scene_assets import glass_pieces
 from ur_sim_driver.description.params import load_ur_params
 from ur_sim_driver.description.tool import get_tool
-from ur_sim_driver.paths import config_dir
 
 BRANCHES = ('no IK branch follows the whole bead (branch [-0.44, -1.86, -1.49, -4.26, -1.1, -2.06]: IK fails at '
             's = 0.258 m (out of reach in this arm configuration); branch [2.19, -1.64, 2.06, -2.44, -1.87, 0.55]: '

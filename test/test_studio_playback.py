@@ -2,10 +2,10 @@
 import numpy as np
 import pytest
 
+from ur_common.paths import config_dir
 from ur_glue_planner.job import load_job
 from ur_glue_planner.motion.plan import plan_job
 from ur_glue_planner.studio.playback import Clock, Timeline, bead_segments, speed_colors
-from ur_sim_driver.paths import config_dir
 
 
 @pytest.fixture(scope='module')

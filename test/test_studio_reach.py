@@ -2,6 +2,7 @@
 import numpy as np
 import pytest
 
+from ur_common.paths import config_dir
 from ur_glue_planner.job import load_job
 from ur_glue_planner.motion.ur_arm_kinematics import ur_kinematics
 from ur_glue_planner.studio.reach import GlassCollision, Reach, waypoint_pose
@@ -9,7 +10,6 @@ from ur_glue_planner.studio.scene_assets import glass_pieces
 from ur_glue_planner.studio.teaching import TeachState
 from ur_sim_driver.description.params import load_ur_params
 from ur_sim_driver.description.tool import get_tool
-from ur_sim_driver.paths import config_dir
 
 HOME = np.radians([0.0, -90.0, 0.0, -90.0, 0.0, 0.0])
 

@@ -13,6 +13,7 @@ from rclpy.callback_groups import ReentrantCallbackGroup
 from sim_harness import ready_action, running_sim, wait_for, wait_still
 from ur_msgs.action import FollowJointTrajectoryUntil, ToolContact
 
+from ur_common.action_client import ActionClient
 from ur_glue_planner.execution.ros_conversions import joint_trajectory
 from ur_glue_planner.job import default_job_path, load_job
 from ur_glue_planner.motion.approach import joint_move
@@ -20,7 +21,6 @@ from ur_glue_planner.motion.plan import plan_job
 from ur_glue_planner.motion.touch import touch_move
 from ur_glue_planner.motion.ur_arm_kinematics import ur_kinematics
 from ur_glue_planner.scene.waypoints import tool_axis
-from ur_sim_driver.action_client import ActionClient
 from ur_sim_driver.motion import result_codes as rc
 from ur_sim_driver.physics.tool_contact import tool_bodies
 from ur_sim_driver.robot.robot_state import NORMAL, PROTECTIVE_STOP

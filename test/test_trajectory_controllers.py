@@ -13,7 +13,7 @@ from rclpy.callback_groups import ReentrantCallbackGroup
 from sim_harness import following, point, ready_action, running_sim, wait_answer, wait_for, wait_still
 from ur_msgs.srv import SetSpeedSliderFraction
 
-from ur_sim_driver.action_client import ActionClient
+from ur_common.action_client import ActionClient
 from ur_sim_driver.motion import conversions as conv
 from ur_sim_driver.motion import result_codes as rc
 

@@ -11,7 +11,7 @@ from rclpy.callback_groups import ReentrantCallbackGroup
 from sim_harness import point, running_sim, trajectory, wait_for, wait_still
 from ur_msgs.action import FollowJointTrajectoryUntil as Until
 
-from ur_sim_driver.action_client import ActionClient  # rclpy's loses a fast goal response
+from ur_common.action_client import ActionClient  # rclpy's loses a fast goal response
 
 TOOL = 'tool_contact_controller'
 ZERO = [0.0] * 6

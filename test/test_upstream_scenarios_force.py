@@ -18,7 +18,7 @@ from ur_msgs.action import ToolContact
 from ur_msgs.msg import FrictionModelParameters
 from ur_msgs.srv import SetForceMode, SetFrictionModelParameters
 
-from ur_sim_driver.action_client import ActionClient  # rclpy's loses a goal response that comes fast
+from ur_common.action_client import ActionClient  # rclpy's loses a goal response that comes fast
 from ur_sim_driver.robot.robot_state import NORMAL, POWER_OFF
 
 pytestmark = pytest.mark.timeout(240)

@@ -16,7 +16,7 @@ from rclpy.callback_groups import ReentrantCallbackGroup
 from sim_harness import driver_test_launch, point, ready_action, start_robot, wait_for, wait_still
 from ur_msgs.action import FollowJointTrajectoryUntil as Until
 
-from ur_sim_driver.action_client import ActionClient  # rclpy's loses a goal response that comes fast
+from ur_common.action_client import ActionClient  # rclpy's loses a goal response that comes fast
 from ur_sim_driver.motion import result_codes as rc
 from ur_sim_driver.robot.robot_state import POWER_OFF
 

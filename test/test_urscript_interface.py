@@ -15,7 +15,7 @@ from ur_msgs.action import SendScript
 from ur_msgs.msg import IOStates
 from ur_msgs.srv import SetIO
 
-from ur_sim_driver.action_client import ActionClient  # rclpy's loses a fast goal response
+from ur_common.action_client import ActionClient  # rclpy's loses a fast goal response
 from ur_sim_driver.robot.robot_state import POWER_OFF, RUNNING
 from ur_sim_driver.urscript.runner import STOPPED
 

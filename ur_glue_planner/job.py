@@ -337,5 +337,5 @@ def load_job(path: str | Path) -> GlueJob:
 
 def default_job_path() -> Path:
     """``config/glue_job.yaml`` of the source tree, else of the installed share directory."""
-    from ur_sim_driver.paths import config_dir
+    from ur_common.paths import config_dir
     return config_dir() / "glue_job.yaml"

@@ -1,8 +1,8 @@
 """ur_sim_driver: a MuJoCo simulation of a Universal Robots arm behind the UR ROS 2 driver interfaces.
 
-Layers, each a subpackage; a module imports only from its own layer, the layers below it, and the modules at the
-top (``errors``, ``paths``, ``spin_thread``, ``action_client``), which import nothing of ours (``test/test_layers.py``
-checks it):
+Layers, each a subpackage; a module imports only from its own layer, the layers below it, the module at the top
+(``errors``, the package's exception family), which imports nothing of ours, and ``ur_common`` (the ground shared
+with ur_glue_planner: the action client, the executor thread, file locations); ``test/test_layers.py`` checks it:
 
     ros          the ur_sim node, the dashboard services, robot_state_publisher, IO and wrench components
     ports        the robot's own network ports: the dashboard server on TCP 29999, RTDE on 30004
@@ -14,6 +14,6 @@ checks it):
     physics      MuJoCo stepping, contacts and sensors, the joint servo and torque control
     description  URDF and MJCF from UR parameters, the tool, the scene and the glue bead's shape and message
 
-ur_glue_planner stands on the shared ground only: ``description`` and the top modules, never the simulator's
-runtime (the planner must drive a real robot just as well).
+ur_glue_planner stands on the shared ground only: ``ur_common`` and ``description``, never the simulator's runtime
+(the planner must drive a real robot just as well).
 """

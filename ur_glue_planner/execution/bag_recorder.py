@@ -29,8 +29,8 @@ from rclpy.experimental import EventsExecutor
 from rclpy.node import Node
 from rclpy.qos import DurabilityPolicy, QoSProfile, ReliabilityPolicy
 
+from ur_common.spin_thread import SpinThread
 from ur_glue_planner.execution.planned_path import planned_path_topic
-from ur_sim_driver.spin_thread import SpinThread
 
 STREAM_DEPTH = 2000  # messages a stream's reader queue holds while the recorder's thread is busy (4 s at 500 Hz)
 FIRST_MESSAGE_TIMEOUT = 5.0  # [s] of wall time start() waits for the first joint state (the subscriptions matched)

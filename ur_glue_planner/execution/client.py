@@ -30,13 +30,13 @@ from rclpy.qos import DurabilityPolicy, QoSProfile
 from sensor_msgs.msg import JointState
 from std_msgs.msg import String
 
+from ur_common.action_client import ActionClient
+from ur_common.spin_thread import SpinThread
 from ur_glue_planner.errors import ClientError
 from ur_glue_planner.execution import ros_conversions as conv
 from ur_glue_planner.execution.joint_state_recording import JointStateRecorder, JointStateSample, Recording
 from ur_glue_planner.execution.trajectory_goal import GoalOutcome, TrajectoryGoal, wait_until
 from ur_glue_planner.motion.kinematics import IkResult, Kinematics
-from ur_sim_driver.action_client import ActionClient
-from ur_sim_driver.spin_thread import SpinThread
 
 DEFAULT_CONTROLLER = 'scaled_joint_trajectory_controller'
 IDLE_PACE = 0.002  # [s] rest of the client's spinning thread after a callback while nothing runs or records

@@ -36,6 +36,7 @@ from pathlib import Path
 import rclpy
 from rclpy.context import Context
 
+from ur_common.paths import config_dir
 from ur_glue_planner.errors import ClientError, JobError, PlanningError
 from ur_glue_planner.execution.bead_listener import BeadListener
 from ur_glue_planner.execution.client import URClient
@@ -51,7 +52,6 @@ from ur_glue_planner.report.bead_report import analyse_bead
 from ur_glue_planner.scene.part_scene import write_part_scene
 from ur_glue_planner.scene.part_variation import Part, VariationLimits, make_part
 from ur_glue_planner.scene.waypoints import windshield_model
-from ur_sim_driver.paths import config_dir
 
 SIM_PARAMS = 'ur_sim_windshield.yaml'
 PORTS = ('dashboard_server', 'rtde', 'primary', 'secondary', 'realtime')  # on free ports: parts never share one

@@ -13,10 +13,10 @@ import numpy as np
 import yaml
 from scipy.spatial.transform import Rotation
 
+from ur_common.paths import config_dir
 from ur_glue_planner.scene.part_variation import Part
 from ur_glue_planner.scene.windshield import write_stl
 from ur_glue_planner.scene.windshield_pieces import piece_name, write_pieces
-from ur_sim_driver.paths import config_dir
 
 NOMINAL_SCENE = 'windshield'
 

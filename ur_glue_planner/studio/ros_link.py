@@ -20,6 +20,7 @@ from rclpy.qos import DurabilityPolicy, QoSProfile
 from sensor_msgs.msg import JointState, PointCloud2
 from std_msgs.msg import String
 
+from ur_common.spin_thread import SpinThread
 from ur_glue_planner.errors import ClientError, PlanningError
 from ur_glue_planner.execution.bead_listener import BeadListener, BeadPoints
 from ur_glue_planner.execution.part_measure import SCAN_TOPIC
@@ -29,7 +30,6 @@ from ur_glue_planner.motion.plan import GluePlan, plan_job
 from ur_glue_planner.studio.part_view import measured_part
 from ur_glue_planner.studio.run_client import StudioClient
 from ur_sim_driver.description.part_scan import from_cloud
-from ur_sim_driver.spin_thread import SpinThread
 
 READ_PERIOD = 1.0 / 60.0  # [s] rest of the ROS thread after each callback: the page shows at most 60 poses a second
 

@@ -5,9 +5,9 @@ from pathlib import Path
 
 import numpy as np
 
+from ur_common.paths import package_dir
 from ur_glue_planner.job import WindshieldSpec
 from ur_sim_driver.description.scene import load_scene, pose_matrix
-from ur_sim_driver.paths import package_dir
 
 
 def glass_pose(spec: WindshieldSpec) -> np.ndarray:

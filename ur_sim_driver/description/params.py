@@ -20,7 +20,7 @@ import numpy as np
 import yaml
 from scipy.spatial.transform import Rotation
 
-from ur_sim_driver import paths
+from ur_common import paths
 from ur_sim_driver.errors import ConfigError
 
 # The types the UR driver supports (jazzy a16a268: hardware_interface.cpp robotTypeFromString), one file each.

@@ -6,10 +6,10 @@ from pathlib import Path
 import numpy as np
 import yaml
 
+from ur_common.paths import config_dir
 from ur_sim_driver.description.params import rpy_to_matrix
 from ur_sim_driver.description.part_scan import ScannerSetup, parse_scanners
 from ur_sim_driver.errors import ConfigError
-from ur_sim_driver.paths import config_dir
 
 
 def pose_matrix(xyz: list[float], rpy: list[float]) -> np.ndarray:

@@ -10,9 +10,9 @@ import rclpy
 from rclpy.executors import Executor, ExternalShutdownException, MultiThreadedExecutor
 from rclpy.signals import SignalHandlerOptions
 
+from ur_common.spin_thread import SpinThread, events_executor
 from ur_sim_driver.errors import UrSimError
 from ur_sim_driver.ros.node import UrSimNode
-from ur_sim_driver.spin_thread import SpinThread, events_executor
 
 GIL_SWITCH_INTERVAL = 2e-4  # [s]
 # Component nodes woken often enough to spin on an executor of their own (make_executors).

@@ -30,7 +30,7 @@ from rclpy.callback_groups import MutuallyExclusiveCallbackGroup, ReentrantCallb
 from rclpy.node import Node
 from ur_msgs.action import FollowJointTrajectoryUntil, ToolContact
 
-from ur_sim_driver.action_client import ActionClient  # rclpy's loses a fast goal response
+from ur_common.action_client import ActionClient  # rclpy's loses a fast goal response
 from ur_sim_driver.controllers import startup
 from ur_sim_driver.controllers.base import Component, Host
 
