@@ -6,6 +6,7 @@ import re
 import numpy as np
 import pytest
 
+from ur_common.quaternions import quat_from_matrix
 from ur_sim_driver.description import params as params_mod
 from ur_sim_driver.description.params import (
     JOINT_NAMES,
@@ -14,7 +15,6 @@ from ur_sim_driver.description.params import (
     config_dir,
     joint_names,
     load_ur_params,
-    matrix_to_quat,
     matrix_to_rpy,
     rpy_to_matrix,
 )
@@ -168,7 +168,7 @@ def test_frame_helpers_round_trip():
     for rpy in rng.uniform(-3, 3, (50, 3)) * [1, 0.5, 1]:
         rot = rpy_to_matrix(rpy)
         np.testing.assert_allclose(rpy_to_matrix(matrix_to_rpy(rot)), rot, atol=1e-12)
-        w, x, y, z = matrix_to_quat(rot)
+        w, x, y, z = quat_from_matrix(rot)
         # Rotation of a unit quaternion, written out independently.
         q_rot = np.array([[1 - 2 * (y * y + z * z), 2 * (x * y - z * w), 2 * (x * z + y * w)],
                           [2 * (x * y + z * w), 1 - 2 * (x * x + z * z), 2 * (y * z - x * w)],

@@ -7,11 +7,10 @@ import math
 import numpy as np
 import pytest
 
+from ur_common.quaternions import matrix_from_quat, quat_from_matrix
 from ur_glue_planner.defaults import DEFAULT_ORIENTATION_ZYX, DEFAULT_WAYPOINTS
 from ur_glue_planner.errors import PlanningError
 from ur_glue_planner.orientation import (
-    matrix_from_quat,
-    quat_from_matrix,
     rot_x,
     rot_y,
     rot_z,

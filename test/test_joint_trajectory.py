@@ -7,12 +7,13 @@ import math
 import numpy as np
 import pytest
 
+from ur_common.quaternions import quat_from_matrix
 from ur_glue_planner.defaults import DEFAULT_ORIENTATION_ZYX, DEFAULT_WAYPOINTS
 from ur_glue_planner.errors import PlanningError
 from ur_glue_planner.motion.joint_trajectory import build_joint_plan, orientation_rates
 from ur_glue_planner.motion.kinematics import IkResult, Kinematics
 from ur_glue_planner.motion.ur_arm_kinematics import ur_kinematics
-from ur_glue_planner.orientation import quat_from_matrix, rot_x, rot_z, rotation_angle, rotation_from_zyx_euler
+from ur_glue_planner.orientation import rot_x, rot_z, rotation_angle, rotation_from_zyx_euler
 from ur_glue_planner.path.glue_path import build_glue_path
 from ur_glue_planner.path.timing import time_path
 from ur_sim_driver.description.params import joint_names, load_ur_params

@@ -1,8 +1,9 @@
 """Rotations in the planner's conventions, all computed by SciPy's ``Rotation`` (the project's one rotation library).
 
 Quaternions are scalar-first ``(w, x, y, z)`` like MATLAB's ``quaternion``/``rotm2quat``, and canonical (w >= 0);
-ROS messages order them ``(x, y, z, w)``, so convert at the ROS boundary only. Every function accepts a leading
-batch shape, e.g. quaternions (..., 4), matrices (..., 3, 3).
+``ur_common.quaternions`` converts them (shared with the simulator). ROS messages order them ``(x, y, z, w)``, so
+convert at the ROS boundary only. Every function accepts a leading batch shape, e.g. quaternions (..., 4), matrices
+(..., 3, 3).
 """
 
 from __future__ import annotations
@@ -11,6 +12,8 @@ import warnings
 
 import numpy as np
 from scipy.spatial.transform import Rotation
+
+from ur_common.quaternions import from_rotation, quat_from_matrix, quat_normalize, to_rotation
 
 
 def rot_x(angle: float) -> np.ndarray:
@@ -50,32 +53,6 @@ def zyx_euler_from_rotation(r: np.ndarray) -> tuple[float, float, float]:
     return float(z), float(y), float(x)
 
 
-def _rotations(q: np.ndarray) -> Rotation:
-    q = np.asarray(q, dtype=float)
-    if np.any(np.linalg.norm(q, axis=-1) < 1e-12):
-        raise ValueError("quaternion of (near) zero norm cannot be normalised")
-    return Rotation.from_quat(q, scalar_first=True)
-
-
-def _quats(r: Rotation) -> np.ndarray:
-    return r.as_quat(canonical=True, scalar_first=True)
-
-
-def quat_normalize(q: np.ndarray) -> np.ndarray:
-    """Unit quaternion(s) (..., 4) with non-negative w (a canonical sign)."""
-    return _quats(_rotations(q))
-
-
-def matrix_from_quat(q: np.ndarray) -> np.ndarray:
-    """Rotation matrices (..., 3, 3) of quaternions (..., 4) (normalised first)."""
-    return _rotations(q).as_matrix()
-
-
-def quat_from_matrix(m: np.ndarray) -> np.ndarray:
-    """Unit quaternions (..., 4), w >= 0, of rotation matrices (..., 3, 3)."""
-    return _quats(Rotation.from_matrix(np.asarray(m, dtype=float)))
-
-
 def slerp(q0: np.ndarray, q1: np.ndarray, t: np.ndarray) -> np.ndarray:
     """Spherical linear interpolation along the shorter arc from q0 to q1.
 
@@ -90,15 +67,15 @@ def slerp(q0: np.ndarray, q1: np.ndarray, t: np.ndarray) -> np.ndarray:
     """
     q0, q1, t = np.asarray(q0, dtype=float), np.asarray(q1, dtype=float), np.asarray(t, dtype=float)
     shape = np.broadcast_shapes(q0.shape[:-1], q1.shape[:-1], t.shape)
-    r0 = _rotations(np.broadcast_to(q0, (*shape, 4)))
-    turn = (r0.inv() * _rotations(np.broadcast_to(q1, (*shape, 4)))).as_rotvec()  # angle <= pi: the shorter arc
-    return _quats(r0 * Rotation.from_rotvec(np.broadcast_to(t, shape)[..., None] * turn))
+    r0 = to_rotation(np.broadcast_to(q0, (*shape, 4)))
+    turn = (r0.inv() * to_rotation(np.broadcast_to(q1, (*shape, 4)))).as_rotvec()  # angle <= pi: the shorter arc
+    return from_rotation(r0 * Rotation.from_rotvec(np.broadcast_to(t, shape)[..., None] * turn))
 
 
 def rotation_vectors(q_from: np.ndarray, q_to: np.ndarray) -> np.ndarray:
     """Rotation vectors (..., 3) [rad] in world axes of the turns from q_from to q_to, quaternions (..., 4):
     q_to = exp(v) q_from."""
-    return (_rotations(q_to) * _rotations(q_from).inv()).as_rotvec()
+    return (to_rotation(q_to) * to_rotation(q_from).inv()).as_rotvec()
 
 
 def rotation_angle(r0: np.ndarray, r1: np.ndarray) -> np.ndarray:

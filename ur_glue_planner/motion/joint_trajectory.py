@@ -29,9 +29,10 @@ from dataclasses import dataclass
 
 import numpy as np
 
+from ur_common.quaternions import matrix_from_quat, quat_from_matrix
 from ur_glue_planner.errors import PlanningError
 from ur_glue_planner.motion.kinematics import Kinematics
-from ur_glue_planner.orientation import matrix_from_quat, quat_from_matrix, rotation_vectors
+from ur_glue_planner.orientation import rotation_vectors
 from ur_glue_planner.path.glue_path import GluePath
 from ur_glue_planner.path.timing import PathTiming, SpeedLimit, Usage, time_path
 

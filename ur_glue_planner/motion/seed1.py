@@ -16,10 +16,11 @@ import time
 import numpy as np
 from scipy.interpolate import make_interp_spline
 
+from ur_common.quaternions import matrix_from_quat, quat_from_matrix
 from ur_glue_planner.errors import PlanningError
 from ur_glue_planner.motion.joint_trajectory import JointPlan
 from ur_glue_planner.motion.kinematics import Kinematics
-from ur_glue_planner.orientation import matrix_from_quat, quat_from_matrix, slerp
+from ur_glue_planner.orientation import slerp
 from ur_glue_planner.path.timing import PathTiming
 
 

@@ -13,8 +13,9 @@ from dataclasses import dataclass
 
 import numpy as np
 
+from ur_common.quaternions import matrix_from_quat
 from ur_glue_planner.errors import PlanningError
-from ur_glue_planner.orientation import as_quaternions, matrix_from_quat, slerp
+from ur_glue_planner.orientation import as_quaternions, slerp
 
 _MIN_SEGMENT = 1e-6  # [m] shorter segments are duplicate waypoints, not geometry
 _MAX_TURN = math.pi - 1e-6  # [rad] a full reversal cannot be blended by an arc

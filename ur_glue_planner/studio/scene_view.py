@@ -6,7 +6,7 @@ from collections.abc import Sequence
 import numpy as np
 import viser
 
-from ur_glue_planner.orientation import matrix_from_quat, quat_from_matrix
+from ur_common.quaternions import matrix_from_quat, quat_from_matrix
 from ur_glue_planner.studio.robot_geometry import RobotModel
 
 GREEN = (40, 190, 70)

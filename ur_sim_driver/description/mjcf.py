@@ -40,7 +40,8 @@ from pathlib import Path
 
 import numpy as np
 
-from ur_sim_driver.description.params import Origin, URParams, matrix_to_quat
+from ur_common.quaternions import quat_from_matrix
+from ur_sim_driver.description.params import Origin, URParams
 from ur_sim_driver.description.tool import ToolDef
 from ur_sim_driver.description.urdf import WORLD_LINK, fmt, kinematic_tree, link_inertials
 from ur_sim_driver.errors import ConfigError
@@ -90,7 +91,7 @@ def _collision_shapes(params: URParams) -> dict[str, list[tuple[str, float, tupl
 
 
 def _pose_attrs(origin: Origin) -> dict[str, str]:
-    return {'pos': fmt(origin.xyz), 'quat': fmt(matrix_to_quat(origin.matrix()[:3, :3]))}
+    return {'pos': fmt(origin.xyz), 'quat': fmt(quat_from_matrix(origin.matrix()[:3, :3]))}
 
 
 def build_mjcf(params: URParams, tf_prefix: str = '', tool: ToolDef | None = None,
@@ -188,7 +189,7 @@ def add_static_mesh(mjcf_xml: str, name: str, stl_path: str | Path, pose: np.nda
         raise ConfigError(f'mesh file {str(path)!r} does not exist')
     Origin.from_matrix(pose)  # raises ConfigError unless a proper rigid transform
     pose = np.asarray(pose, dtype=float)
-    pos_quat = {'pos': fmt(pose[:3, 3]), 'quat': fmt(matrix_to_quat(pose[:3, :3]))}
+    pos_quat = {'pos': fmt(pose[:3, 3]), 'quat': fmt(quat_from_matrix(pose[:3, :3]))}
     try:
         root = ET.fromstring(mjcf_xml)
     except ET.ParseError as exc:

@@ -60,11 +60,6 @@ def matrix_to_rpy(rot: np.ndarray) -> tuple[float, float, float]:
     return float(roll), float(pitch), float(yaw)
 
 
-def matrix_to_quat(rot: np.ndarray) -> np.ndarray:
-    """Unit quaternion (4,) as (w, x, y, z), MuJoCo's order, w >= 0, of a rotation matrix (3, 3)."""
-    return Rotation.from_matrix(np.asarray(rot, dtype=float)).as_quat(canonical=True, scalar_first=True)
-
-
 @dataclass(frozen=True)
 class Origin:
     """A URDF-style origin: translation ``xyz`` [m] and roll-pitch-yaw ``rpy`` [rad]."""

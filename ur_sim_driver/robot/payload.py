@@ -11,7 +11,7 @@ from dataclasses import dataclass
 
 import numpy as np
 
-from ur_sim_driver.description.params import matrix_to_quat
+from ur_common.quaternions import quat_from_matrix
 from ur_sim_driver.errors import ConfigError
 
 MAX_MASS = 100.0  # [kg] far above any UR's rated payload (UR30: 30 kg): a typo, not a payload
@@ -45,7 +45,7 @@ class Payload:
         moments, axes = np.linalg.eigh(self.tensor())
         if np.linalg.det(axes) < 0.0:  # eigh may return a reflection; a body frame must be a rotation
             axes[:, 2] = -axes[:, 2]
-        return np.maximum(moments, 0.0), matrix_to_quat(axes)
+        return np.maximum(moments, 0.0), quat_from_matrix(axes)
 
 
 NO_PAYLOAD = Payload(0.0, np.zeros(3), np.zeros(6))

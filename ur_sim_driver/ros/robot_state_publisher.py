@@ -17,9 +17,10 @@ from scipy.spatial.transform import Rotation
 from std_msgs.msg import String
 from tf2_msgs.msg import TFMessage
 
+from ur_common.quaternions import quat_from_matrix
 from ur_sim_driver.controllers.base import Component, Cycle, Host
 from ur_sim_driver.controllers.cdr_template import CdrTemplate
-from ur_sim_driver.description.params import load_ur_params, matrix_to_quat
+from ur_sim_driver.description.params import load_ur_params
 from ur_sim_driver.description.tool import get_tool
 from ur_sim_driver.description.urdf import JointSpec, build_urdf, kinematic_tree
 
@@ -33,7 +34,7 @@ def _transform(joint: JointSpec) -> TransformStamped:
     tf.child_frame_id = joint.child
     t = tf.transform.translation
     t.x, t.y, t.z = (float(v) for v in joint.origin.xyz)
-    w, x, y, z = matrix_to_quat(joint.origin.matrix()[:3, :3])
+    w, x, y, z = quat_from_matrix(joint.origin.matrix()[:3, :3])
     r = tf.transform.rotation
     r.x, r.y, r.z, r.w = float(x), float(y), float(z), float(w)
     return tf
