@@ -277,8 +277,9 @@ def test_stop_cancels_the_running_goal(studio, page, sim):
     assert studio.live.client.runs == 3
 
 
-def test_a_new_plan_clears_the_executed_path(studio, page):
-    wait_until(lambda: studio.live_view.pieces_drawn > 0, 'the executed path of the runs')
+def test_a_new_plan_clears_the_executed_path_and_the_bead(studio, page):
+    wait_until(lambda: studio.live_view.pieces_drawn > 0 and studio.bead_points_drawn > 0,
+               'the executed path and the bead of the runs')
     old = studio.plan
     _tab(page, 'Plan')
     page.get_by_role('button', name='Plan', exact=True).click()
@@ -286,6 +287,7 @@ def test_a_new_plan_clears_the_executed_path(studio, page):
     # The page loop may have begun the next path already: at most the tip where the arm rests, which draws nothing
     with studio._lock:
         assert studio.live_view.pieces_drawn == 0 and len(studio.live_view.trail) <= 1
+        assert studio.bead_points_drawn == 0  # the runs' bead was laid for the plan before
     wp = studio.teach.current()  # and the IK robot at the selected waypoint, not the plan's start
     wait_until(lambda: np.allclose(studio._model_view.frames['dispenser_tip'].position, wp.position, atol=1e-6),
                'the IK robot at the selected waypoint')

@@ -20,6 +20,10 @@ def test_four_non_blank_figures_and_the_speed_text():
         assert (image < 200).mean() > 0.01, f'{name} is blank'  # lines and text drawn on white
     text = speed_summary(plan)
     assert f'{plan.summary.speed_mean:.4f}' in text and 'Within 1 %' in text
+    # What the user waited for, from the click, with the planner's share of it.
+    waited = speed_summary(plan, 1.234)
+    assert 'ready 1234 ms after Plan was pressed' in waited
+    assert f'(planning {1e3 * plan.summary.planning_seconds:.0f} ms of it)' in waited
 
 
 def test_the_figures_and_the_slider_say_which_time_they_show():

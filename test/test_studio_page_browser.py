@@ -83,6 +83,14 @@ def test_an_arrow_key_turns_the_tool_and_not_the_view(studio, page):
     assert studio.teach.waypoints[0].orientation_zyx[2] == pytest.approx(before[2] + np.radians(5.0), abs=1e-12)
 
 
+def test_reset_view_brings_the_camera_back_where_a_new_page_has_it(studio, page):
+    client = page.studio_client
+    set_camera(client, (3.0, -2.0, 0.5), (2.0, -2.0, 0.5))  # flown off, looking away from the cell
+    page.get_by_role('button', name='Reset view', exact=True).click()
+    wait_until(lambda: np.allclose(client.camera.position, INITIAL_CAMERA[0], atol=1e-6)
+               and np.allclose(client.camera.look_at, INITIAL_CAMERA[1], atol=1e-6), 'the camera back')
+
+
 def test_after_typing_a_waypoint_number_the_keys_turn_the_tool_again(studio, page):
     _settled(studio)
     field = page.get_by_label('Waypoint', exact=True)

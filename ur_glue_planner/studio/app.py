@@ -129,7 +129,8 @@ class Studio(TeachView, PlanView, RunView):
         return self.live_view.bead_points_drawn if self.live_view is not None else 0
 
     def _on_connect(self, client) -> None:
-        # A view of the cell from the front left, above the glass (the default view looks from far away).
+        """A new page's camera, and the Reset view button's: the cell from the front left, above the glass (the
+        default view looks from far away)."""
         client.camera.up_direction = (0.0, 0.0, 1.0)
         client.camera.position = INITIAL_CAMERA[0]
         client.camera.look_at = INITIAL_CAMERA[1]
@@ -137,6 +138,7 @@ class Studio(TeachView, PlanView, RunView):
     # ---- GUI ---------------------------------------------------------------------------------------------------
     def _wire(self, with_job: bool) -> None:
         p = self.panel
+        p.reset_view.on_click(lambda e: e.client is not None and self._on_connect(e.client))
         if not with_job:
             p.clear_trail.on_click(lambda _: self._reset_trail())
             return

@@ -82,8 +82,9 @@ def plan_figures(plan: GluePlan) -> dict[str, np.ndarray]:
     return out
 
 
-def speed_summary(plan: GluePlan) -> str:
-    """Markdown lines with the planned TCP speed figures and the plan's size."""
+def speed_summary(plan: GluePlan, waited: float | None = None) -> str:
+    """Markdown lines with the planned TCP speed figures and the plan's size; `waited` [s]: from the Plan click to
+    the plan on the page (measuring the part, planning, the figures), the time the user waited."""
     s = plan.summary
     start, end = bead_window(plan)
     return (f'**Bead** {s.bead_length:.3f} m in {s.bead_duration:.2f} s (total {s.total_duration:.2f} s)  \n'
@@ -93,4 +94,5 @@ def speed_summary(plan: GluePlan) -> str:
             f'(commanded {plan.job.tcp_speed:.3f})  \n'
             f'**Within 1 %** on {100 * s.within_1pct:.1f} % of the bead; {s.slowdowns} slowdown(s); '
             f'peak joint speed {100 * s.max_velocity_usage:.0f} % of the limit  \n'
-            f'planned in {1e3 * s.planning_seconds:.0f} ms')
+            + (f'ready {1e3 * waited:.0f} ms after Plan was pressed (planning {1e3 * s.planning_seconds:.0f} ms of it)'
+               if waited is not None else f'planned in {1e3 * s.planning_seconds:.0f} ms'))

@@ -120,6 +120,14 @@ class LiveView:
             piece.remove()
         self._pieces = []
 
+    def clear_bead(self) -> None:
+        """Take the deposited bead off the page (a new plan or part: it was laid for the one before); the next bead
+        the robot lays is drawn again."""
+        if self._bead_cloud is not None:
+            self._bead_cloud.remove()
+            self._bead_cloud = None
+        self.bead_points_drawn = 0
+
     @property
     def pieces_drawn(self) -> int:
         """Pieces of the executed path on the page."""

@@ -57,6 +57,7 @@ class Panel:
     load_path: object = None
     load_button: object = None
     commands: dict | None = None
+    reset_view: object = None
 
 
 def build_panel(gui: viser.GuiApi, with_job: bool, live: bool, save_default: str) -> Panel:
@@ -67,9 +68,12 @@ def build_panel(gui: viser.GuiApi, with_job: bool, live: bool, save_default: str
         p.legend = gui.add_html(legend_html(legend_entries(False, live)))
         p.live_text = gui.add_markdown(LIVE_TEXT)
         p.clear_trail = gui.add_button('Clear tip path')
+        p.reset_view = gui.add_button('Reset view')
         return p
     gui.add_html(KEYS_HTML)
     p.legend = gui.add_html(legend_html(legend_entries(True, live)))
+    # The camera back where a new page puts it (keys held in the view can fly it anywhere, even out of the scene).
+    p.reset_view = gui.add_button('Reset view')
     tabs = gui.add_tab_group()
     with tabs.add_tab('Teach'):
         p.wp_info = gui.add_markdown('')

@@ -7,6 +7,8 @@ works on the studio's state under its lock). Playback is :mod:`~ur_glue_planner.
 """
 from __future__ import annotations
 
+import time
+
 import numpy as np
 
 from ur_glue_planner.errors import GluePlannerError, JobError
@@ -45,6 +47,7 @@ class PlanView:
 
         The model robot then shows the selected waypoint's IK again; play or the slider play the plan on it.
         """
+        clicked = time.monotonic()
         self.begin('planning ...')
         with self._lock:
             if self.sjob is None:
@@ -77,7 +80,7 @@ class PlanView:
             for name, image in figures.items():
                 self.panel.images[name].image = image
                 self.panel.images[name].visible = True
-            self.panel.plan_info.content = speed_summary(plan)
+            self.panel.plan_info.content = speed_summary(plan, time.monotonic() - clicked)
             self.part_view.show(plan)
             self.show_ik()
         self.say(f'planned: bead {plan.summary.bead_length:.3f} m, {plan.summary.total_duration:.2f} s')
@@ -109,7 +112,8 @@ class PlanView:
                 self.clock = self.clock.with_speed(float(self.panel.speed.value))
 
     def _clear_plan(self) -> None:
-        """No plan: its bead line, figures, text, slider and the executed path leave the page."""
+        """No plan: its bead line, figures, text, slider, the executed path and the bead deposited on the part leave
+        the page."""
         self.plan = self.timeline = self.clock = None
         if self._planned_bead is not None:
             self._planned_bead.remove()
@@ -121,3 +125,5 @@ class PlanView:
         self.panel.time.value = 0.0
         self.part_view.clear()
         self._reset_trail()
+        if self.live_view is not None:
+            self.live_view.clear_bead()
