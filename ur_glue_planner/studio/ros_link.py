@@ -32,6 +32,8 @@ from ur_glue_planner.studio.run_client import StudioClient
 from ur_sim_driver.description.part_scan import from_cloud
 
 READ_PERIOD = 1.0 / 60.0  # [s] rest of the ROS thread after each callback: the page shows at most 60 poses a second
+REST_READ_PERIOD = 0.1  # [s] the same while the robot rests: a move is seen within it
+MOVED = 1e-6  # [rad] a joint further than this from the last joint state: the robot moves
 
 
 @dataclass(frozen=True)
@@ -86,9 +88,12 @@ class LiveRobot:
         self.node.create_subscription(PointCloud2, f'{self.prefix}/{SCAN_TOPIC}', self._on_scan, latched)
         self._executor = SingleThreadedExecutor(context=context)
         self._executor.add_node(self.node)
-        # Joint states come every control cycle (500 Hz) and the page shows at most 60 poses a second: the thread
-        # rests after each callback (the subscription keeps the newest; the bead and scan messages are whole).
-        self._spinner = SpinThread(self._executor, 'studio_ros', pace=lambda: READ_PERIOD).start()
+        # Joint states come every control cycle (500 Hz) and the page shows at most 60 poses a second, none while
+        # the robot rests: the thread rests after each callback (the subscription keeps the newest; the bead and
+        # scan messages are whole).
+        self._moving = True
+        self._spinner = SpinThread(self._executor, 'studio_ros',
+                                   pace=lambda: READ_PERIOD if self._moving else REST_READ_PERIOD).start()
         self._run_thread: threading.Thread | None = None
         self._stop = threading.Event()
         self.client: StudioClient | None = None  # the runs' connection, made by the first run
@@ -97,7 +102,9 @@ class LiveRobot:
         state = LiveState(msg.header.stamp.sec + msg.header.stamp.nanosec * 1e-9, tuple(msg.name),
                           np.array(msg.position), time.monotonic())
         with self._lock:
-            self._state = state
+            last, self._state = self._state, state
+        self._moving = (last is None or last.names != state.names
+                        or float(np.max(np.abs(state.q - last.q), initial=0.0)) > MOVED)
 
     def _on_scan(self, msg: PointCloud2) -> None:
         profiles = from_cloud(msg)
