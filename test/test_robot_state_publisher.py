@@ -125,6 +125,17 @@ def check_frames_against_fk(rec: TfRecorder, prefix: str, count: int) -> float:
     return tcp_diff
 
 
+def assert_published_every(stamps_ns: np.ndarray, period: float) -> None:
+    """The arm joints' /tf stamps [ns] (arrival order) are `period` [s] of simulated time apart: every gap a whole
+    number of periods and the shortest one period. A real-time listener on a loaded machine can lose messages (its
+    queue overflows; /tf carries tool0_controller every cycle too), which leaves a gap of several periods."""
+    gaps = np.diff(np.sort(np.unique(stamps_ns))) * 1e-9
+    assert len(gaps) >= 5, f'only {len(gaps) + 1} /tf messages of the arm joints'
+    periods = gaps / period
+    np.testing.assert_allclose(periods, np.round(periods), atol=1e-4)
+    assert gaps.min() == pytest.approx(period, abs=1e-6), gaps
+
+
 def move_and_record(h, rec: TfRecorder, target, duration: float, count: int) -> None:
     wait_for(lambda: rec.urdf is not None and rec.static, what='/robot_description and /tf_static')
     handle = h.send(h.goal([point(target, duration, np.zeros(6))]))
@@ -145,10 +156,10 @@ def test_tf_equals_forward_kinematics_of_the_joint_states():
         print(f'tool0_controller vs tool0: largest difference {tcp_diff:.2e}')
         assert tcp_diff < TCP_TOL
         with rec.lock:
-            stamps = np.array(rec.joint_stamps[-10:]) * 1e-9
+            stamps = np.array(rec.joint_stamps)
             frames = set(rec.frames)
         # 20 Hz of simulated time (the default publish_frequency).
-        np.testing.assert_allclose(np.diff(stamps), 0.05, atol=1e-6)
+        assert_published_every(stamps, 0.05)
         assert {'base_link', 'base', 'base_link_inertia', 'shoulder_link', 'wrist_3_link', 'flange', 'tool0',
                 'ft_frame', 'ee_link', 'tool0_controller'} <= frames
 
@@ -161,13 +172,13 @@ def test_tf_prefix_on_every_frame_and_publish_frequency():
         check_frames_against_fk(rec, prefix, 10)
         wait_for(lambda: rec.wrench_frames, what='a wrench')
         with rec.lock:
-            stamps = np.array(rec.joint_stamps[-10:]) * 1e-9
+            stamps = np.array(rec.joint_stamps)
             frames = set(rec.frames)
         assert all(f.startswith(prefix) for f in frames), sorted(frames)
         assert {f'{prefix}dispenser', f'{prefix}dispenser_tip', f'{prefix}tool0_controller'} <= frames
         assert rec.wrench_frames == {f'{prefix}tool0_controller'}
         assert all(n.startswith(prefix) for n in rec.joint_names)
-        np.testing.assert_allclose(np.diff(stamps), 0.02, atol=1e-6)
+        assert_published_every(stamps, 0.02)
 
 
 @pytest.mark.parametrize('value', [0.0, -20.0, float('nan'), 'fast', 2000.0])
