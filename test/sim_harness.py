@@ -112,7 +112,7 @@ class Pacer:
 
     def __init__(self, node: UrSimNode, speed: float = 1.0) -> None:
         """`speed`: robot seconds per wall second; 0 steps as fast as the followed clients take the robot's time
-        (for a client whose every wait is on robot time, its wall-clock deadlines only guards against a hang)."""
+        (for a client whose every wait is on robot time, its wall-clock deadlines only guard against a hang)."""
         self.node = node
         self.speed = speed
         self._holds = 0

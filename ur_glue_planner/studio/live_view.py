@@ -17,10 +17,9 @@ from ur_glue_planner.studio import scene_view as sv
 from ur_glue_planner.studio.legend import DEPOSIT_COLOR, EXECUTED_COLOR
 from ur_glue_planner.studio.robot_geometry import RobotModel, tip_frame_of
 from ur_glue_planner.studio.robot_status import robot_status
-from ur_glue_planner.studio.ros_link import LiveRobot
+from ur_glue_planner.studio.ros_link import MOVED, LiveRobot
 
 TRAIL_STEP = 5e-4  # [m] a new tip path point once the tip has moved this far
-POSE_STEP = 1e-6  # [rad] a joint that moved less than this since the pose last sent: not sent again (invisible)
 
 
 class LiveView:
@@ -68,7 +67,7 @@ class LiveView:
         # A robot at rest still publishes every cycle: its pose goes to the page only when it moved (each pose
         # sent makes every open page render the scene again).
         if (self._shown is not None and self._shown[0] == state.names
-                and float(np.max(np.abs(np.asarray(state.q) - self._shown[1]))) <= POSE_STEP):
+                and float(np.max(np.abs(state.q - self._shown[1]))) <= MOVED):
             return
         self._shown = (state.names, np.array(state.q))
         self.view.show(state.names, state.q)

@@ -33,7 +33,7 @@ from ur_sim_driver.description.part_scan import from_cloud
 
 READ_PERIOD = 1.0 / 60.0  # [s] rest of the ROS thread after each callback: the page shows at most 60 poses a second
 REST_READ_PERIOD = 0.1  # [s] the same while the robot rests: a move is seen within it
-MOVED = 1e-6  # [rad] a joint further than this from the last joint state: the robot moves
+MOVED = 1e-6  # [rad] a joint further than this from a pose seen before has moved (less is invisible on the page)
 
 
 @dataclass(frozen=True)
