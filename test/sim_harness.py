@@ -17,7 +17,7 @@ from control_msgs.msg import JointTolerance, SpeedScalingFactor
 from lifecycle_msgs.msg import State
 from rcl_interfaces.msg import Log
 from rclpy.callback_groups import ReentrantCallbackGroup
-from rclpy.executors import MultiThreadedExecutor, SingleThreadedExecutor
+from rclpy.executors import SingleThreadedExecutor
 from rclpy.node import Node
 from rclpy.parameter import Parameter
 from rclpy.qos import DurabilityPolicy, QoSProfile
@@ -743,9 +743,11 @@ def running_sim(lockstep: bool | None = None, paced: bool = False, ros_args: lis
                         start=not (lockstep or paced))
         client = Node('test_client', context=ctx)
         # ur_sim's nodes on the executors its executable gives them (main.make_executors: one of them walks some
-        # 200 entities at every wake); the client on its own, woken only by its own answers and messages.
+        # 200 entities at every wake); the client on its own, woken only by its own answers and messages. One
+        # thread, as a user's `rclpy.spin`: callbacks run in the order their messages arrived (on a thread pool two
+        # feedback messages of one goal were appended out of order, a reentrant group lets them run side by side).
         executors = make_executors(sim)
-        client_executor = MultiThreadedExecutor(num_threads=4, context=ctx)
+        client_executor = SingleThreadedExecutor(context=ctx)
         client_executor.add_node(client)
         executors.append(client_executor)
         spinners = [SpinThread(e, f'test_executor_{i}').start() for i, e in enumerate(executors)]
