@@ -58,6 +58,9 @@ def test_runs_to_the_end_without_contact(robot):
     assert result.result.error_code == Until.Result.SUCCESSFUL
     assert result.result.until_condition_result == Until.Result.NOT_TRIGGERED
     assert feedback and list(feedback[-1].feedback.joint_names) == h.joints
+    # passed on in the order the controller sent it (its stamps never go back)
+    stamps = [f.feedback.header.stamp.sec + f.feedback.header.stamp.nanosec * 1e-9 for f in feedback]
+    assert np.all(np.diff(stamps) > 0.0), np.diff(stamps)
     # The until goal was cancelled with it (asynchronously, as upstream): once it has ended, a new goal is taken.
     tool = next(c for c in h.sim.components if c.name == TOOL)
     wait_still(lambda: not tool.watching, what='the tool contact goal cancelled')

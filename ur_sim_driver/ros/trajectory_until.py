@@ -26,7 +26,7 @@ import threading
 from action_msgs.msg import GoalStatus
 from control_msgs.action import FollowJointTrajectory
 from rclpy.action import ActionServer, CancelResponse, GoalResponse
-from rclpy.callback_groups import MutuallyExclusiveCallbackGroup, ReentrantCallbackGroup
+from rclpy.callback_groups import MutuallyExclusiveCallbackGroup
 from rclpy.node import Node
 from ur_msgs.action import FollowJointTrajectoryUntil, ToolContact
 
@@ -72,7 +72,9 @@ class TrajectoryUntilNode(Component):
         cfg = host.cfg
         default = startup.initial_joint_controller(cfg) or cfg.controller_name
         motion = node.declare_parameter('motion_controller', default).value
-        clients = ReentrantCallbackGroup()
+        # One callback at a time: feedback passed on in the order it came (on the MultiThreadedExecutor a reentrant
+        # group runs two feedback callbacks side by side, and they may publish out of order). None of them blocks.
+        clients = MutuallyExclusiveCallbackGroup()
         self._trajectory_client = ActionClient(node, FollowJointTrajectory,
                                                cfg.prefixed(f'{motion}/follow_joint_trajectory'),
                                                callback_group=clients)
