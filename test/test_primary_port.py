@@ -291,7 +291,7 @@ def test_a_runtime_error_and_a_syntax_error_give_runtime_exceptions_with_the_lin
     assert messages[3]['title'] == 'PROGRAM_XXX_STOPPED'
     client.send('def broken():\n  x = \nend\n')
     error = client.message()
-    assert error['type'] == RUNTIME_EXCEPTION and error['line'] == 2 and error['column'] > 0
+    assert error['type'] == RUNTIME_EXCEPTION and error['line'] == 3 and error['column'] > 0  # at 'end': no value
     assert h.sim.host.scripts.current is None  # nothing runs
 
 

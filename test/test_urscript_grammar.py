@@ -54,11 +54,12 @@ def test_a_secondary_program_and_bare_statements():
 
 
 @pytest.mark.parametrize('source, line, column, reason', [
-    ('x = ', 1, 5, 'unexpected the end of a line'),
+    ('x = ', 1, 5, 'unexpected the end of the program'),
     ('movej([0,0,0,0,0,0]', 1, 20, "expected one of: ')', ','"),
     ('def f():\n  x = 1\n', 2, 8, 'unexpected the end of the program'),
     ('x = 1 $ 2', 1, 7, "unexpected character '$'"),
-    ('if x\n  y = 1\nend', 1, 5, "expected one of: "),
+    ('if x\n  y = 1\nend', 2, 3, "unexpected 'y'; expected one of: "),
+    ('thread t(a):\n  sync()\nend', 1, 10, "unexpected 'a'; expected one of: ')'"),  # a thread takes no arguments
 ])
 def test_what_does_not_compile_is_refused_with_line_column_and_reason(source, line, column, reason):
     with pytest.raises(ScriptError) as caught:

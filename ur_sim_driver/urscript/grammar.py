@@ -1,14 +1,19 @@
 """URScript's syntax, in the subset ur_sim runs, parsed with lark (LALR): programs and statements to a tree.
 
-A program is a ``def name():`` (or ``sec name():``) block, or bare statements; blocks end with ``end``;
-indentation carries no meaning; ``#`` starts a comment. Statements: assignments (``global``/``local`` optional,
-to a variable or a list element), calls, ``if``/``elif``/``else``, ``while``, ``def`` functions with default
-arguments, ``return``, ``break``, ``continue``, ``halt``, ``pass``. Expressions: numbers, ``True``/``False``,
+A program is a ``def name():`` (or ``sec name():``) block, or bare statements; blocks end with ``end``. Line
+breaks and indentation carry no meaning, as on the controller (ur_rtde's control script continues an assignment
+on the line after a comment, and one-line programs such as ``def p(): movej(q) end`` are common); ``#`` starts a
+comment, and ``$ 3 "MoveJ"``, the label lines of programs PolyScope writes, are skipped. Statements: assignments
+(``global``/``local`` optional, to a variable or a list element), calls, ``if``/``elif``/``else``, ``while``,
+``def`` functions with default arguments, ``return``, ``break``, ``continue``, ``halt``, ``pass``, and threads:
+``thread name(): ... end``, ``run name()`` (an expression: the thread's handle), ``kill``, ``join``,
+``enter_critical`` / ``exit_critical``. Expressions: numbers, ``True``/``False``,
 strings, lists ``[..]``, poses ``p[..]``, indexing, calls with keyword arguments, ``+ - * / %``, comparisons,
 ``and or xor not``.
 """
 from __future__ import annotations
 
+import re
 from functools import lru_cache
 
 from lark import Lark, Tree
@@ -17,28 +22,34 @@ from lark.exceptions import UnexpectedCharacters, UnexpectedInput, UnexpectedTok
 from ur_sim_driver.errors import ScriptError
 
 GRAMMAR = r"""
-program: _NL* statement*
+program: statement*
 
-?statement: funcdef | secdef | if_stmt | while_stmt | simple_stmt
-?simple_stmt: (assign | call_stmt | return_stmt | break_stmt | continue_stmt | halt_stmt | pass_stmt) _NL+
+?statement: funcdef | secdef | threaddef | if_stmt | while_stmt | simple_stmt
+?simple_stmt: assign | call_stmt | return_stmt | break_stmt | continue_stmt | halt_stmt | pass_stmt
+            | kill_stmt | join_stmt | enter_critical | exit_critical
 assign: SCOPE? target "=" expr
 ?target: NAME -> var_target
-       | NAME "[" expr "]" -> index_target
-call_stmt: call
+       | NAME "[" expr ("," expr)? "]" -> index_target
+call_stmt: call | run_thread
 return_stmt: "return" expr?
 break_stmt: "break"
 continue_stmt: "continue"
 halt_stmt: "halt"
 pass_stmt: "pass"
-funcdef: "def" NAME "(" params? ")" ":" _NL+ block "end" _NL+
-secdef: "sec" NAME "(" ")" ":" _NL+ block "end" _NL+
+kill_stmt: "kill" expr
+join_stmt: "join" expr
+enter_critical: "enter_critical"
+exit_critical: "exit_critical"
+funcdef: "def" NAME "(" params? ")" ":" block "end"
+secdef: "sec" NAME "(" ")" ":" block "end"
+threaddef: "thread" NAME "(" ")" ":" block "end"
 params: param ("," param)*
 param: NAME ("=" expr)?
 block: statement*
-if_stmt: "if" expr ":" _NL+ block elif_clause* else_clause? "end" _NL+
-elif_clause: "elif" expr ":" _NL+ block
-else_clause: "else" ":" _NL+ block
-while_stmt: "while" expr ":" _NL+ block "end" _NL+
+if_stmt: "if" expr ":" block elif_clause* else_clause? "end"
+elif_clause: "elif" expr ":" block
+else_clause: "else" ":" block
+while_stmt: "while" expr ":" block "end"
 
 ?expr: or_test
 ?or_test: xor_test | or_test "or" xor_test -> or_
@@ -49,8 +60,9 @@ while_stmt: "while" expr ":" _NL+ block "end" _NL+
 ?arith: term | arith ADD_OP term -> binop
 ?term: factor | term MUL_OP factor -> binop
 ?factor: postfix | "-" factor -> neg | "+" factor
-?postfix: atom | postfix "[" expr "]" -> index | call
+?postfix: atom | postfix "[" expr ("," expr)? "]" -> index | call | run_thread
 call: NAME "(" args? ")"
+run_thread: "run" NAME "(" ")"
 args: arg ("," arg)*
 ?arg: expr | NAME "=" expr -> kwarg
 ?atom: NUMBER -> number
@@ -72,11 +84,14 @@ NAME: /[A-Za-z_][A-Za-z0-9_]*/
 NUMBER: /(\d+\.\d*|\.\d+|\d+)([eE][+-]?\d+)?/
 STRING: /"[^"\n]*"/ | /'[^'\n]*'/
 COMMENT: /#[^\n]*/
-_NL: /\r?\n/
-%ignore /[ \t\f]+/
+%ignore /[ \t\f\r\n]+/
 %ignore /\\\r?\n/
 %ignore COMMENT
 """
+
+
+# PolyScope's program label lines (``$ 3 "MoveJ"``): blanked, so that lines keep their numbers
+_LABEL = re.compile(r'^[ \t]*\$ *\d+\b[^\n]*$', re.MULTILINE)
 
 
 @lru_cache(maxsize=1)
@@ -88,14 +103,17 @@ def parse(source: str) -> Tree:
     """The syntax tree of a URScript program or statements; ScriptError naming the line, the column and what was
     expected where the text is not URScript (the robot refuses such a program, and nothing runs)."""
     try:
-        return _parser().parse(source if source.endswith('\n') else source + '\n')
+        return _parser().parse(_LABEL.sub('', source))
     except UnexpectedToken as exc:
-        found = 'the end of a line' if exc.token.type == '_NL' else repr(str(exc.token))
-        if exc.token.type == '$END':
+        line, column = exc.line, exc.column
+        found = repr(str(exc.token))
+        if exc.token.type == '$END':  # where the text ends (lark points at the last token)
             found = 'the end of the program'
+            lines = source.rstrip('\r\n').split('\n')
+            line, column = len(lines), len(lines[-1]) + 1
         expected = ', '.join(sorted(_describe(t) for t in exc.expected))
-        raise ScriptError(f'syntax error on line {exc.line}, column {exc.column}: unexpected {found}; '
-                          f'expected one of: {expected}', exc.line, exc.column) from None
+        raise ScriptError(f'syntax error on line {line}, column {column}: unexpected {found}; '
+                          f'expected one of: {expected}', line, column) from None
     except UnexpectedCharacters as exc:
         raise ScriptError(f'syntax error on line {exc.line}, column {exc.column}: unexpected character '
                           f'{source.splitlines()[exc.line - 1][exc.column - 1]!r}', exc.line, exc.column) from None
@@ -104,7 +122,7 @@ def parse(source: str) -> Tree:
                           exc.column) from None
 
 
-_TERMINALS = {'_NL': 'a new line', 'NAME': 'a name', 'NUMBER': 'a number', 'STRING': 'a string',
+_TERMINALS = {'NAME': 'a name', 'NUMBER': 'a number', 'STRING': 'a string',
               'COMP_OP': 'a comparison', 'ADD_OP': '+ or -', 'MUL_OP': '*, / or %', 'SCOPE': 'global or local',
               'POSE_OPEN': 'p[', '$END': 'the end of the program'}
 

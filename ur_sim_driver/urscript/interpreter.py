@@ -1,5 +1,6 @@
-"""The URScript interpreter: walks the syntax tree of ``grammar.parse`` as a generator that yields a request each time
-the program needs robot time (a motion, ``sleep``, ``sync``), and runs everything else at once.
+"""The URScript interpreter: walks the syntax tree of ``grammar.parse`` as generators, one per thread
+(``threads.py`` schedules them), each yielding a request when its thread needs robot time (a motion, ``sleep``,
+``sync``, ``join``), and running everything else at once.
 
 What a statement does to the robot goes through :class:`ScriptRobot` (``program.py`` implements it on the simulated
 robot, under the simulation lock). A name that is neither a variable nor a function, a wrong argument, an index
@@ -15,7 +16,8 @@ from lark import Token, Tree
 
 from ur_sim_driver.errors import ScriptError
 from ur_sim_driver.urscript.builtins import builtins
-from ur_sim_driver.urscript.values import REQUIRED, Pose, Request, is_number, show, truth
+from ur_sim_driver.urscript.threads import Threads
+from ur_sim_driver.urscript.values import REQUIRED, Pose, Request, ThreadHandle, is_number, show, truth
 
 # A loop that runs this many times without spending robot time is the controller's "infinite loop" error.
 MAX_ITERATIONS_WITHOUT_TIME = 100_000
@@ -54,8 +56,8 @@ class _Halt(Exception):
 
 
 class Interpreter:
-    """Runs one program's tree against `robot`; :meth:`run` is the generator. `secondary`: a ``sec`` program,
-    which may not spend robot time (the controller refuses motion and sleep there)."""
+    """Runs one program's tree against `robot`: its main program is thread 0 of `threads`. `secondary`: a ``sec``
+    program, which may not spend robot time (the controller refuses motion and sleep there)."""
 
     def __init__(self, tree: Tree, robot: ScriptRobot) -> None:
         self.robot = robot
@@ -69,15 +71,26 @@ class Interpreter:
             self.body = statements
         self.globals: dict[str, Any] = {}
         self.functions: dict[str, Tree] = {}
-        self._spinning = 0  # loop iterations since robot time was last spent
-        self.line, self.column = 0, 0  # the statement running (1-based)
+        self.thread_definitions: dict[str, Tree] = {}
         self.builtins = builtins(robot)
+        self.threads = Threads()
+        self.threads.start(self.name or 'main', lambda: self._body(self.body, self.globals))
 
-    def run(self) -> Generator[Request, None, None]:
+    @property
+    def line(self) -> int:
+        """The line of the statement running (1-based) in the thread running now, or in the main program."""
+        return (self.threads.current or self.threads.main).line
+
+    @property
+    def column(self) -> int:
+        return (self.threads.current or self.threads.main).column
+
+    def _body(self, statements, scope: dict) -> Generator[Request, None, None]:
+        """A thread's statements (the main program's or a thread's): return ends the thread, halt the program."""
         try:
-            yield from self._block(self.body, self.globals)
+            yield from self._block(statements, scope)
         except _Halt:
-            return
+            self.threads.halted = True
         except _Return:
             return
         except (_Break, _Continue) as exc:
@@ -90,7 +103,8 @@ class Interpreter:
 
     def _statement(self, node: Tree, scope: dict):
         kind = node.data
-        self.line, self.column = node.meta.line, node.meta.column  # where a request's failure points
+        thread = self.threads.current
+        thread.line, thread.column = node.meta.line, node.meta.column  # where a request's failure points
         try:
             if kind == 'assign':
                 yield from self._assign(node, scope)
@@ -102,6 +116,20 @@ class Interpreter:
                 yield from self._while(node, scope)
             elif kind in ('funcdef', 'secdef'):
                 self.functions[str(node.children[0])] = node
+            elif kind == 'threaddef':
+                self.thread_definitions[str(node.children[0])] = node
+            elif kind == 'kill_stmt':
+                target = self.threads.find((yield from self._eval(node.children[0], scope)), 'kill')
+                if target is not None:
+                    self.threads.kill(target)
+            elif kind == 'join_stmt':
+                until = self.threads.join((yield from self._eval(node.children[0], scope)))
+                if until is not None:
+                    yield Request('join', (until,))
+            elif kind == 'enter_critical':
+                self.threads.enter_critical()
+            elif kind == 'exit_critical':
+                self.threads.exit_critical()
             elif kind == 'return_stmt':
                 value = (yield from self._eval(node.children[0], scope)) if node.children else None
                 raise _Return(value)
@@ -127,11 +155,17 @@ class Interpreter:
         if target.data == 'var_target':
             into[name] = _copy(value)
             return
-        index = yield from self._eval(target.children[1], scope)
         container = self._lookup(name, scope)
-        if not isinstance(container, list):
-            raise ScriptError(f'{name} is not a list; only list elements can be assigned by index')
-        container[self._index(index, len(container), name)] = _copy(value)
+        subscripts = target.children[1:]  # m[i, j] = v: row i, column j of a matrix
+        for k, subscript in enumerate(subscripts):
+            index = yield from self._eval(subscript, scope)
+            if not isinstance(container, list):
+                raise ScriptError(f'{name} is not a list; only list elements can be assigned by index')
+            index = self._index(index, len(container), name)
+            if k == len(subscripts) - 1:
+                container[index] = _copy(value)
+            else:
+                container = container[index]
 
     def _if(self, node: Tree, scope: dict):
         children = node.children
@@ -149,9 +183,10 @@ class Interpreter:
 
     def _while(self, node: Tree, scope: dict):
         condition, body = node.children
+        thread = self.threads.current
         while truth((yield from self._eval(condition, scope))):
-            self._spinning += 1
-            if self._spinning > MAX_ITERATIONS_WITHOUT_TIME:
+            thread.spinning += 1
+            if thread.spinning > MAX_ITERATIONS_WITHOUT_TIME:
                 raise ScriptError(f'infinite loop detected: the loop on line {node.meta.line} ran '
                                   f'{MAX_ITERATIONS_WITHOUT_TIME} times without spending robot time (add sync() or '
                                   'sleep())', node.meta.line, node.meta.column)
@@ -161,10 +196,6 @@ class Interpreter:
                 break
             except _Continue:
                 continue
-
-    def spent_time(self) -> None:
-        """The program waited for robot time: its loops start counting again."""
-        self._spinning = 0
 
     # ---- expressions -------------------------------------------------------------------------------------
     def _eval(self, node, scope: dict):
@@ -191,14 +222,18 @@ class Interpreter:
                 raise ScriptError(f'a pose has 6 numbers (x, y, z [m], rx, ry, rz [rad]); got {show(values)}')
             return Pose(tuple(float(v) for v in values))
         if kind == 'index':
-            container = yield from self._eval(node.children[0], scope)
-            index = yield from self._eval(node.children[1], scope)
-            items = container.values if isinstance(container, Pose) else container
-            if not isinstance(items, (list, tuple)):
-                raise ScriptError(f'{show(container)} cannot be indexed (not a list or pose)')
-            return items[self._index(index, len(items), 'the list')]
+            value = yield from self._eval(node.children[0], scope)
+            for subscript in node.children[1:]:  # m[i, j]: row i, column j of a matrix (a list of rows)
+                index = yield from self._eval(subscript, scope)
+                items = value.values if isinstance(value, Pose) else value
+                if not isinstance(items, (list, tuple)):
+                    raise ScriptError(f'{show(value)} cannot be indexed (not a list, matrix or pose)')
+                value = items[self._index(index, len(items), 'the list')]
+            return value
         if kind == 'call':
             return (yield from self._call(node, scope))
+        if kind == 'run_thread':
+            return self._run_thread(str(node.children[0]))
         if kind == 'neg':
             value = yield from self._eval(node.children[0], scope)
             return _arith('-', 0, value) if not isinstance(value, list) else [-v for v in value]
@@ -261,6 +296,15 @@ class Interpreter:
                 raise ScriptError(f'{name}: a secondary program (sec) cannot spend robot time; use a def program')
             return (yield result)
         return result
+
+    def _run_thread(self, name: str) -> ThreadHandle:
+        definition = self.thread_definitions.get(name)
+        if definition is None:
+            known = ', '.join(sorted(self.thread_definitions)) or 'none'
+            raise ScriptError(f'run: no thread named {name!r} is defined (threads defined so far: {known})')
+        if self.secondary:
+            raise ScriptError('run: a secondary program (sec) cannot start threads')
+        return self.threads.start(name, lambda: self._body(_block(definition), {})).handle
 
     def _user_call(self, definition: Tree, positional: list, keywords: dict):
         name = str(definition.children[0])

@@ -2,8 +2,9 @@
 simulation loop under its lock, one control period at a time.
 
 Each cycle: the time of the cycle that passed is counted (a move's time at the speed scaling factor, as the
-robot's speed slider and its own slowing scale every motion; ``sleep`` in robot time), the program runs on until it
-waits again, and the current move is sampled for the robot's servo, which keeps the joints within their limits as
+robot's speed slider and its own slowing scale every motion; ``sleep`` in robot time), the program's threads run
+on until each waits again (``threads.py``), and the current move is sampled for the robot's servo (the last motion
+commanded by any thread wins), which keeps the joints within their limits as
 it does for ROS controllers. A runtime error stops the program where it is; the arm holds. A program that ends while
 a ``speedj`` still moves the arm stops it (``stopj`` at :data:`END_DECELERATION`).
 """
@@ -51,14 +52,10 @@ class ScriptProgram:
         self.ik = UrAnalyticIK(sim.params.dh, base_pose=_DH_FROM_BASE_LINK)
         self.error: ScriptError | None = None
         self.finished = False  # the program has ended (and the arm was commanded to rest)
-        self._program = self.interpreter.run()
+        self.threads = self.interpreter.threads
         self._program_done = False
-        self._reply = None
         self._move: Move | None = None
         self._move_t = 0.0  # [s] of the current move's own (scaled) time
-        self._wait_move = False  # the statement that started the move has not returned yet
-        self._sleep = 0.0  # [s] of sleep left
-        self._synced = False  # sync() waits for the next cycle
         self._ref: TrajectorySample | None = None
         self._qd_nominal: np.ndarray | None = None  # the current move's velocity this cycle [rad/s]
 
@@ -75,10 +72,7 @@ class ScriptProgram:
         if current is not None:  # where the current move is now: a move the program starts this cycle starts there
             self._move_t += period * factor
             self._sample(factor)
-        self._sleep = max(0.0, self._sleep - period)
-        self._synced = False
-        if self._wait_move and self._move_t >= self._move.returns_after:
-            self._wait_move = False
+        self.threads.new_cycle(period)
         self._run()
         if self._move is None:
             return self._ref, self._ref.positions
@@ -109,35 +103,36 @@ class ScriptProgram:
 
     # ---- the program --------------------------------------------------------------------------------------
     def _run(self) -> None:
-        while not self._program_done and not self._wait_move and self._sleep <= 0.0 and not self._synced:
-            try:
-                request = self._program.send(self._reply)
-                self._reply = None
-            except StopIteration:
-                self._end()
-                return
-            except ScriptError as exc:
-                self._stop(exc, None)
-                return
-            try:
-                self._handle(request)
-            except (ScriptError, ConfigError) as exc:  # the statement that asked: its line
-                line, column = self.interpreter.line, self.interpreter.column
-                self._stop(ScriptError(f'line {line}: {exc}', line, column), None)
-                return
+        if self._program_done:
+            return
+        try:
+            self.threads.step(self._handle)
+        except ScriptError as exc:
+            self._stop(exc, None)
+            return
+        except ConfigError as exc:  # a move the robot refuses: the statement that asked, its line
+            thread = self.threads.current or self.threads.main
+            self._stop(ScriptError(f'line {thread.line}: {exc}', thread.line, thread.column), None)
+            return
+        if self.threads.main.done or self.threads.halted:
+            self._end()
 
-    def _handle(self, request: Request) -> None:
-        self.interpreter.spent_time()
-        if request.kind == 'sleep':
-            self._sleep = request.args[0]
-        elif request.kind == 'sync':
-            self._synced = True
-        else:
-            self._move = self._build(*request.args)
-            self._move_t = 0.0
-            self._qd_nominal = self._move.sample(0.0)[1]  # a move built next in this same cycle starts from it
-            # 'move' returns when the motion function would; 'start' (a native loop's) at once
-            self._wait_move = request.kind == 'move' and self._move.returns_after > 0.0
+    def _handle(self, thread, request: Request):
+        """A thread's motion: the arm's move from now on; the thread waits until the move returns (or another
+        replaces it)."""
+        try:
+            move = self._build(*request.args)
+        except ScriptError as exc:  # the statement that asked: its line
+            if exc.line:
+                raise
+            raise ScriptError(f'line {thread.line}: {exc}', thread.line, thread.column) from None
+        self._move = move
+        self._move_t = 0.0
+        self._qd_nominal = move.sample(0.0)[1]  # a move built next in this same cycle starts from it
+        # 'move' returns when the motion function would; 'start' (a native loop's) at once
+        if request.kind != 'move' or move.returns_after <= 0.0:
+            return None
+        return lambda: self._move is not move or self._move_t >= move.returns_after
 
     def _end(self) -> None:
         self._program_done = True

@@ -26,6 +26,7 @@ import re
 from collections.abc import Iterator
 
 from ur_sim_driver.errors import ScriptError
+from ur_sim_driver.urscript.threads import Threads
 from ur_sim_driver.urscript.values import Pose, Request
 
 NAME = 'rtde_control'
@@ -88,9 +89,8 @@ class RtdeControlLoop:
         self._async = False  # an asynchronous move or stop runs
         self._stop_type = 'stopj'  # the script's stop_type: set to stopl only by an asynchronous stop
         self._speed_type = 'speedj'
-
-    def spent_time(self) -> None:
-        """Each cycle spends robot time (no infinite loop here)."""
+        self.threads = Threads()  # one: the loop
+        self.threads.start(NAME, self.run)
 
     # ---- registers --------------------------------------------------------------------------------------------
     def _int(self, i: int) -> int:

@@ -66,9 +66,21 @@ def show(value) -> str:
 
 
 @dataclass(frozen=True)
+class ThreadHandle:
+    """What ``run name()`` returns: the thread's number (from 1; never equal to a number, so ``h != 0`` holds, as
+    programs test it) and its name."""
+
+    number: int
+    name: str
+
+    def __str__(self) -> str:  # as textmsg shows it
+        return f'Thread_{self.name}_{self.number}'
+
+
+@dataclass(frozen=True)
 class Request:
-    """What the program waits for: `kind` ('move', 'sleep', 'sync', or 'start': a move that returns at once) and its
-    arguments (a move's: its name and the URScript arguments, resolved)."""
+    """What a thread waits for: `kind` ('move', 'sleep', 'sync', 'join', or 'start': a move that returns at once) and
+    its arguments (a move's: its name and the URScript arguments, resolved; a join's: the condition)."""
 
     kind: str
     args: tuple = ()
