@@ -5,6 +5,7 @@ from __future__ import annotations
 import numpy as np
 
 from ur_sim_driver.motion.trajectory import TrajectorySample
+from ur_sim_driver.ports.script_sockets import ScriptSockets
 from ur_sim_driver.robot.robot_state import RobotState
 from ur_sim_driver.robot.sim_config import SimConfig
 from ur_sim_driver.robot.simulator import Simulator
@@ -16,12 +17,16 @@ READY = [0.0, -1.2, 1.2, -1.57, -1.57, 0.0]  # [rad] an elbow-bent pose, away fr
 class Box:
     """The simulated robot with its program slot, stepped cycle by cycle as the simulation loop steps it."""
 
-    def __init__(self, q0=READY, factor: float = 1.0) -> None:
+    def __init__(self, q0=READY, factor: float = 1.0, before_step=None) -> None:
+        """`before_step`: called before each control cycle (a test's loopback server answers there)."""
         self.sim = Simulator(SimConfig(ur_type='ur5e', initial_positions=tuple(q0)))
         self.robot = RobotState()
         self.factor = factor
         self.log: list[str] = []
-        self.runner = ScriptRunner(self.sim, self.robot, lambda: self.factor, self.log.append)
+        self.network_log: list[str] = []
+        self.before_step = before_step
+        self.runner = ScriptRunner(self.sim, self.robot, lambda: self.factor, self.log.append,
+                                   lambda: ScriptSockets(lambda: self.sim.time, self.network_log.append))
         self.events = []
         self.runner.listen(self.events.append)
         self.q: list[np.ndarray] = []
@@ -37,6 +42,8 @@ class Box:
         return self.sim.time - t0
 
     def step(self) -> None:
+        if self.before_step is not None:
+            self.before_step()
         state = self.sim.state()
         program = self.runner.commander()
         if program is None:  # no program: the robot holds where it is

@@ -53,6 +53,8 @@ class SimConfig:
     physics_substeps: int = 0
     # The trajectory controllers' own factor at start (ros2_controllers' speed_scaling.initial_scaling_factor, >= 0).
     initial_scaling_factor: float = 1.0
+    # urscript.allow_remote_sockets: a program's socket_open may reach hosts other than loopback addresses.
+    allow_remote_sockets: bool = False
     real_time_factor: float = 1.0
     # In step with a client: the loop steps only while the simulated time is at most pace_lag [s] past the time the
     # client last published on pace_topic (rosgraph_msgs/Clock), at real time's pace before its first message; ''
@@ -225,6 +227,7 @@ def sim_config_from_params(params: Mapping[str, Any]) -> SimConfig:
                                                                      d.protective_stop_window), 0.0, 1.0),
         update_rate=update_rate,
         physics_substeps=substeps,
+        allow_remote_sockets=bool(get('urscript.allow_remote_sockets', d.allow_remote_sockets)),
         initial_scaling_factor=_number('speed_scaling.initial_scaling_factor',
                                        get('speed_scaling.initial_scaling_factor', d.initial_scaling_factor),
                                        0.0, math.inf),
@@ -326,10 +329,11 @@ def _ros_name(parameter: str, value: Any) -> str:
 
 
 # Parameter names ur_sim reads: the configuration's fields, groups read as <group>.<name>, and rclpy's own.
-_GROUPS = ('constraints', 'speed_scaling', 'dashboard_server', 'rtde', 'primary', 'secondary', 'realtime')
+_GROUPS = ('constraints', 'speed_scaling', 'dashboard_server', 'rtde', 'primary', 'secondary', 'realtime', 'urscript')
 _PORTS = ('dashboard_server', 'rtde', 'primary', 'secondary', 'realtime')
 _GROUPED = {f'{g}_{n}' for g in _PORTS for n in ('host', 'port')}
-_KNOWN = (set(SimConfig.__dataclass_fields__) - {'initial_scaling_factor'} - _GROUPED) | set(_GROUPS) | {
+_IN_GROUPS = {'initial_scaling_factor', 'allow_remote_sockets'}  # speed_scaling.*, urscript.*
+_KNOWN = (set(SimConfig.__dataclass_fields__) - _IN_GROUPS - _GROUPED) | set(_GROUPS) | {
     'use_sim_time', 'start_type_description_service'}
 PARAMETER_NAMES = ', '.join(sorted(f'{n}.*' if n in _GROUPS else n for n in _KNOWN))
 

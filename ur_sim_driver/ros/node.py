@@ -51,6 +51,7 @@ from ur_sim_driver.physics.physics import ArmState
 from ur_sim_driver.ports.dashboard_port import DashboardPort
 from ur_sim_driver.ports.primary_port import REALTIME, SECONDARY, PrimaryPort
 from ur_sim_driver.ports.rtde_port import RtdePort
+from ur_sim_driver.ports.script_sockets import ScriptSockets
 from ur_sim_driver.ports.tcp_port import PortError, close_all
 from ur_sim_driver.robot.dashboard_server import DashboardServer
 from ur_sim_driver.robot.direct_torque import STOPJ_DECELERATION
@@ -136,8 +137,11 @@ class UrSimNode(Node):
         # The robot's file system for this run (the dashboard's flight reports and support files).
         self._robot_files = tempfile.TemporaryDirectory(prefix='ur_sim_robot_')
         files = Path(self._robot_files.name)
+        logger = self.get_logger()
         scripts = ScriptRunner(self.sim, self.robot, lambda: self.scaling.factor,
-                               lambda text: self.get_logger().info(f'textmsg: {text}'))
+                               lambda text: logger.info(f'textmsg: {text}'),
+                               lambda: ScriptSockets(lambda: self.sim.time, logger.warning,
+                                                     self.cfg.allow_remote_sockets))
         self.host = Host(self.cfg, self.sim, self._lock, self.robot, self.scaling, self.context, files,
                          DashboardServer(self.robot, self.cfg.simulated_ur_type, self.cfg.software_version, files),
                          scripts, self.clock)

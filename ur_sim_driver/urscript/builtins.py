@@ -11,6 +11,7 @@ import numpy as np
 
 from ur_sim_driver.errors import ScriptError
 from ur_sim_driver.robot.registers import N_BITS, N_DOUBLES, N_INTS
+from ur_sim_driver.urscript.socket_functions import socket_functions
 from ur_sim_driver.urscript.values import (
     REQUIRED,
     Pose,
@@ -158,4 +159,5 @@ def builtins(robot) -> dict[str, tuple[list, Callable]]:
         for side in ('input', 'output'):
             table[f'read_{side}_{kind}_register'] = register(kind, side)
         table[f'write_output_{kind}_register'] = register(kind, 'output', write=True)
+    table.update(socket_functions(robot))
     return table

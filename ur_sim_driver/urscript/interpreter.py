@@ -36,6 +36,7 @@ class ScriptRobot(Protocol):
     def set_payload(self, mass: float, cog: list[float]) -> None: ...
     def registers(self): ...  # robot.registers.Registers
     def textmsg(self, text: str) -> None: ...
+    def sockets(self): ...  # ports.script_sockets.ScriptSockets: the program's client connections
 
 
 class _Return(Exception):

@@ -40,15 +40,18 @@ class ScriptProgram:
         factor: the robot's speed scaling factor now, in [0, 1].
         log: where textmsg writes (the robot's log).
         name: the program's name when it defines none (bare statements).
+        sockets: its client connections (``ports.script_sockets.ScriptSockets``), closed when it ends; None: a
+            program without network (a socket function is then a runtime error).
     """
 
     def __init__(self, source: str, sim: Simulator, robot: RobotState, factor: Callable[[], float],
-                 log: Callable[[str], None], name: str = 'unnamed') -> None:
+                 log: Callable[[str], None], name: str = 'unnamed', sockets=None) -> None:
         # ur_rtde's control script runs as a native loop of the same requests (rtde_control.py)
         self.interpreter = RtdeControlLoop(source, self) if recognises(source) else Interpreter(parse(source), self)
         self.name = self.interpreter.name or name
         self.secondary = self.interpreter.secondary
         self.sim, self.robot, self._factor, self._log = sim, robot, factor, log
+        self._sockets = sockets
         self.ik = UrAnalyticIK(sim.params.dh, base_pose=_DH_FROM_BASE_LINK)
         self.error: ScriptError | None = None
         self.finished = False  # the program has ended (and the arm was commanded to rest)
@@ -73,6 +76,8 @@ class ScriptProgram:
             self._move_t += period * factor
             self._sample(factor)
         self.threads.new_cycle(period)
+        if self._sockets is not None:
+            self._sockets.flush()
         self._run()
         if self._move is None:
             return self._ref, self._ref.positions
@@ -261,6 +266,16 @@ class ScriptProgram:
 
     def registers(self):
         return self.robot.registers
+
+    def sockets(self):
+        if self._sockets is None:
+            raise ScriptError('this program has no network: sockets are not available here')
+        return self._sockets
+
+    def close(self) -> None:
+        """The program has ended: its sockets close."""
+        if self._sockets is not None:
+            self._sockets.close_all()
 
     def textmsg(self, text: str) -> None:
         self._log(text)

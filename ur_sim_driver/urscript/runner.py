@@ -34,11 +34,14 @@ class ScriptEvent:
 
 
 class ScriptRunner:
-    """Args: sim, robot: the simulated robot; factor: its speed scaling factor now; log: the robot's log."""
+    """Args: sim, robot: the simulated robot; factor: its speed scaling factor now; log: the robot's log;
+    sockets: makes a program's client sockets (``ports.script_sockets.ScriptSockets`` on robot time), None: programs
+    have no network."""
 
     def __init__(self, sim: Simulator, robot: RobotState, factor: Callable[[], float],
-                 log: Callable[[str], None]) -> None:
+                 log: Callable[[str], None], sockets: Callable[[], object] | None = None) -> None:
         self.sim, self.robot, self._factor, self._log = sim, robot, factor, log
+        self._sockets = sockets
         self.current: ScriptProgram | None = None
         self._listeners: list[Callable[[ScriptEvent], None]] = []
 
@@ -50,7 +53,8 @@ class ScriptRunner:
     def compile(self, source: str, name: str = 'unnamed') -> ScriptProgram:
         """Parse `source` into a program of this robot, ready to start; ScriptError when it does not compile. Needs
         no lock: parsing a long program must not hold up the control loop."""
-        return ScriptProgram(source, self.sim, self.robot, self._factor, self._text, name)
+        return ScriptProgram(source, self.sim, self.robot, self._factor, self._text, name,
+                             self._sockets() if self._sockets is not None else None)
 
     def submit(self, source: str, name: str = 'unnamed') -> ScriptProgram:
         """compile() and start() in one (under the lock)."""
@@ -61,6 +65,7 @@ class ScriptRunner:
         now; nothing runs then."""
         if program.secondary:
             program.run_now()
+            program.close()
             if program.error is not None:
                 e = program.error
                 self._emit(ScriptEvent(RUNTIME_ERROR, program.name, str(e), e.line, e.column))
@@ -100,6 +105,7 @@ class ScriptRunner:
         return True
 
     def _finish(self, program: ScriptProgram, why: str) -> None:
+        program.close()
         if program is self.current:
             self.current = None
             self.robot.end_script(program.name)

@@ -20,7 +20,7 @@ from dataclasses import dataclass, field
 from typing import Any
 
 from ur_sim_driver.errors import ScriptError
-from ur_sim_driver.urscript.values import Request, ThreadHandle
+from ur_sim_driver.urscript.values import PENDING, Request, ThreadHandle
 
 SLEEP_TOLERANCE = 1e-9  # [s] a sleep this close to its end is over
 
@@ -167,6 +167,8 @@ class Threads:
                     thread.synced = True
                 elif request.kind == 'join':
                     thread.until = request.args[0]
+                elif request.kind == 'wait':
+                    thread.until = _answer(thread, request.args[0])
                 else:
                     thread.until = handle(thread, request)
             finally:
@@ -178,3 +180,14 @@ class Threads:
             self.critical = None
         thread.critical = 0
         thread.until = None
+
+
+def _answer(thread: ScriptThread, poll: Callable[[], object]) -> Callable[[], bool]:
+    """The condition of a wait: holds once `poll` answers, its answer then being what the call returns."""
+    def ready() -> bool:
+        value = poll()
+        if value is PENDING:
+            return False
+        thread.reply = value
+        return True
+    return ready
