@@ -1,6 +1,6 @@
 """ur_rtde (PyPI ur-rtde) as its users run it, against ur_sim's ports: RTDEControlInterface with its default flags
-uploads its control script on the real-time port and drives the robot through RTDE registers; ur_sim recognises the
-script and runs its register protocol natively (``urscript/rtde_control.py``). On a loopback address of this test
+uploads its control script on the real-time port and drives the robot through RTDE registers; ur_sim's URScript
+interpreter runs the script as it runs any program (threads included). On a loopback address of this test
 process's own (ur_rtde has no port arguments; ROS_DOMAIN_ID is unique per process), paced to the wall clock that
 ur_rtde waits on."""
 import json

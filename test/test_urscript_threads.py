@@ -102,9 +102,10 @@ def test_kill_ends_the_thread_and_the_threads_it_started():
   sleep(0.01)
   textmsg(inner_ticks - seen)
   kill p
-  textmsg("killing twice is harmless")
+  kill 0
+  textmsg("killing twice, or 0, is harmless")
 end''')
-    assert box.log == ['0', 'killing twice is harmless']
+    assert box.log == ['0', 'killing twice, or 0, is harmless']
 
 
 def test_motion_from_a_thread_and_the_last_command_wins():
@@ -178,7 +179,7 @@ end''')
 def test_thread_errors_name_what_is_wrong():
     for source, line, reason in [
         ('def prog():\n  run nobody()\nend', 2, "no thread named 'nobody'"),
-        ('def prog():\n  kill 3\nend', 2, 'kill: 3 is not a thread handle'),
+        ('def prog():\n  kill "t"\nend', 2, 'kill: t is not a thread handle'),
         ('def prog():\n  exit_critical\nend', 2, 'exit_critical without enter_critical'),
         ('def prog():\n  global h = 0\n  thread a():\n    sleep(1)\n  end\n  thread b():\n    join h\n  end\n'
          '  h = run a()\n  run b()\n  sleep(0.1)\nend', 7, 'a thread can only join the threads it started'),

@@ -12,6 +12,7 @@ import numpy as np
 from ur_sim_driver.errors import ScriptError
 from ur_sim_driver.robot.registers import N_BITS, N_DOUBLES, N_INTS
 from ur_sim_driver.urscript.socket_functions import socket_functions
+from ur_sim_driver.urscript.state_functions import state_functions
 from ur_sim_driver.urscript.values import (
     REQUIRED,
     Pose,
@@ -160,4 +161,5 @@ def builtins(robot) -> dict[str, tuple[list, Callable]]:
             table[f'read_{side}_{kind}_register'] = register(kind, side)
         table[f'write_output_{kind}_register'] = register(kind, 'output', write=True)
     table.update(socket_functions(robot))
+    table.update(state_functions(robot))
     return table

@@ -158,6 +158,14 @@ class Interpreter:
             return
         container = self._lookup(name, scope)
         subscripts = target.children[1:]  # m[i, j] = v: row i, column j of a matrix
+        if isinstance(container, Pose) and len(subscripts) == 1:  # a pose's element: the variable gets a new pose
+            index = self._index((yield from self._eval(subscripts[0], scope)), 6, name)
+            if not is_number(value):
+                raise ScriptError(f'{name}[{index}] is a number (a pose holds 6); got {show(value)}')
+            values = list(container.values)
+            values[index] = float(value)
+            (scope if name in scope else self.globals)[name] = Pose(tuple(values))
+            return
         for k, subscript in enumerate(subscripts):
             index = yield from self._eval(subscript, scope)
             if not isinstance(container, list):
@@ -219,17 +227,15 @@ class Interpreter:
                 values.append((yield from self._eval(expr, scope)))
             if kind == 'list_':
                 return values
+            if len(values) == 1 and self._defined('p', scope):  # p[i] of a variable named p, not a pose literal
+                return self._element(self._lookup('p', scope), values[0])
             if len(values) != 6 or not all(is_number(v) for v in values):
                 raise ScriptError(f'a pose has 6 numbers (x, y, z [m], rx, ry, rz [rad]); got {show(values)}')
             return Pose(tuple(float(v) for v in values))
         if kind == 'index':
             value = yield from self._eval(node.children[0], scope)
             for subscript in node.children[1:]:  # m[i, j]: row i, column j of a matrix (a list of rows)
-                index = yield from self._eval(subscript, scope)
-                items = value.values if isinstance(value, Pose) else value
-                if not isinstance(items, (list, tuple)):
-                    raise ScriptError(f'{show(value)} cannot be indexed (not a list, matrix or pose)')
-                value = items[self._index(index, len(items), 'the list')]
+                value = self._element(value, (yield from self._eval(subscript, scope)))
             return value
         if kind == 'call':
             return (yield from self._call(node, scope))
@@ -259,6 +265,15 @@ class Interpreter:
         if kind == 'factor':  # unary plus
             return (yield from self._eval(node.children[0], scope))
         raise ScriptError(f'{kind} is not supported by ur_sim')
+
+    def _element(self, value, index):
+        items = value.values if isinstance(value, Pose) else value
+        if not isinstance(items, (list, tuple)):
+            raise ScriptError(f'{show(value)} cannot be indexed (not a list, matrix or pose)')
+        return items[self._index(index, len(items), 'the list')]
+
+    def _defined(self, name: str, scope: dict) -> bool:
+        return name in scope or name in self.globals
 
     def _lookup(self, name: str, scope: dict):
         if name in scope:

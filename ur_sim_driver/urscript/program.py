@@ -10,6 +10,7 @@ a ``speedj`` still moves the arm stops it (``stopj`` at :data:`END_DECELERATION`
 """
 from __future__ import annotations
 
+from collections import deque
 from collections.abc import Callable
 
 import numpy as np
@@ -24,10 +25,10 @@ from ur_sim_driver.robot.simulator import Simulator
 from ur_sim_driver.urscript.grammar import parse
 from ur_sim_driver.urscript.interpreter import Interpreter
 from ur_sim_driver.urscript.moves import JointLine, Move, Servo, Speed, ToolLine, ToolSpeed, tool_jacobian
-from ur_sim_driver.urscript.rtde_control import RtdeControlLoop, recognises
 from ur_sim_driver.urscript.values import Pose, Request, is_number, show
 
 END_DECELERATION = 2.0  # [rad/s^2] a program that ends while the arm moves at speed stops it with this
+HISTORY = 1250  # control cycles of actual joint positions kept for get_actual_joint_positions_history
 _DH_FROM_BASE_LINK = np.diag([-1.0, -1.0, 1.0, 1.0])  # the controller's base frame is DH frame 0
 
 
@@ -46,8 +47,8 @@ class ScriptProgram:
 
     def __init__(self, source: str, sim: Simulator, robot: RobotState, factor: Callable[[], float],
                  log: Callable[[str], None], name: str = 'unnamed', sockets=None) -> None:
-        # ur_rtde's control script runs as a native loop of the same requests (rtde_control.py)
-        self.interpreter = RtdeControlLoop(source, self) if recognises(source) else Interpreter(parse(source), self)
+        self.source = source
+        self.interpreter = Interpreter(parse(source), self)
         self.name = self.interpreter.name or name
         self.secondary = self.interpreter.secondary
         self.sim, self.robot, self._factor, self._log = sim, robot, factor, log
@@ -60,6 +61,10 @@ class ScriptProgram:
         self._move: Move | None = None
         self._move_t = 0.0  # [s] of the current move's own (scaled) time
         self._ref: TrajectorySample | None = None
+        self._history: deque[np.ndarray] = deque(maxlen=HISTORY)  # the actual joints of the last cycles
+        self._cycle = 0  # control cycles the program has run
+        self._touch_from: int | None = None  # the cycle a tool contact began (tool_contact)
+        self.force_settings = {'gain_scaling': 1.0, 'damping': 0.005}  # force_mode_set_gain_scaling, _damping
         self._qd_nominal: np.ndarray | None = None  # the current move's velocity this cycle [rad/s]
 
     # ---- the commander ------------------------------------------------------------------------------------
@@ -70,6 +75,8 @@ class ScriptProgram:
     def command(self, state: ArmState, period: float) -> tuple[TrajectorySample, np.ndarray | None]:
         if self._ref is None:
             self.take_over(state)
+        self._history.append(state.q.copy())
+        self._cycle += 1
         factor = self._factor()
         current = self._move
         if current is not None:  # where the current move is now: a move the program starts this cycle starts there
@@ -124,7 +131,7 @@ class ScriptProgram:
 
     def _handle(self, thread, request: Request):
         """A thread's motion: the arm's move from now on; the thread waits until the move returns (or another
-        replaces it)."""
+        replaces it), at least until the next cycle."""
         try:
             move = self._build(*request.args)
         except ScriptError as exc:  # the statement that asked: its line
@@ -134,10 +141,10 @@ class ScriptProgram:
         self._move = move
         self._move_t = 0.0
         self._qd_nominal = move.sample(0.0)[1]  # a move built next in this same cycle starts from it
-        # 'move' returns when the motion function would; 'start' (a native loop's) at once
-        if request.kind != 'move' or move.returns_after <= 0.0:
-            return None
-        return lambda: self._move is not move or self._move_t >= move.returns_after
+        # It returns when the motion function would, and never before the next cycle: a motion takes at least a
+        # control cycle, so a thread that calls one in a loop spends robot time (ur_rtde's speed_thread does).
+        cycle = self._cycle
+        return lambda: self._cycle > cycle and (self._move is not move or self._move_t >= move.returns_after)
 
     def _end(self) -> None:
         self._program_done = True
@@ -240,6 +247,59 @@ class ScriptProgram:
         """No move runs, or the current one has reached its end."""
         return self._move is None or self._move_t >= self._move.duration
 
+    def actual_q(self) -> np.ndarray:
+        return self.sim.state().q
+
+    def actual_qd(self) -> np.ndarray:
+        return self.sim.state().qd
+
+    def target_q(self) -> np.ndarray:
+        return self._ref.positions if self._ref is not None else self.sim.state().q
+
+    def target_qd(self) -> np.ndarray:
+        return self._ref.velocities if self._ref is not None else np.zeros(len(self.sim.state().q))
+
+    def steptime(self) -> float:
+        return self.sim.control_dt
+
+    def joint_history(self, steps: int) -> np.ndarray:
+        """The actual joint positions `steps` control cycles ago (0: now; the oldest kept when further back)."""
+        if not self._history:
+            return self.sim.state().q
+        return self._history[-1 - min(steps, len(self._history) - 1)]
+
+    def forward_kin(self, q: np.ndarray, tcp: Pose | None) -> Pose:
+        """The TCP pose at `q`: `tcp` from tool0 (None: the robot's TCP, tool0 in ur_sim)."""
+        t = self.ik.fk(np.asarray(q, float))
+        return Pose.from_matrix(t if tcp is None else t @ tcp.matrix())
+
+    def jacobian(self, q: np.ndarray) -> np.ndarray:
+        return tool_jacobian(self.ik, q)
+
+    def tcp_speed(self, q: np.ndarray, qd: np.ndarray) -> np.ndarray:
+        """(6,) the TCP's linear [m/s] and angular [rad/s] velocity, base axes."""
+        return tool_jacobian(self.ik, q) @ np.asarray(qd, float)
+
+    def within_joint_limits(self, q: np.ndarray) -> bool:
+        p = self.sim.params
+        return bool(np.all((q >= p.q_min) & (q <= p.q_max)))
+
+    def tool_contact(self, direction: np.ndarray) -> int:
+        """tool_contact(): 0 without a contact; with one, the control cycles since it began (at least 1), the steps
+        back to the joints of just before it. Any contact of the tool over the threshold counts, whatever
+        `direction`."""
+        if not self.tool_touch():
+            self._touch_from = None
+            return 0
+        if self._touch_from is None:
+            self._touch_from = self._cycle
+        return self._cycle - self._touch_from + 1
+
+    def payload(self) -> tuple[float, list[float], list[float]]:
+        """What the robot believes is mounted: mass [kg], cog (tool0) [m], inertia (6,) [kg m^2]."""
+        p = self.sim.payload
+        return float(p.mass), [float(v) for v in p.cog], [float(v) for v in p.inertia]
+
     def tool_touch(self) -> bool:
         """The tool or the flange touches something over the tool contact force, this control period."""
         return strongest_touch(self.sim.physics.contacts(), self.sim.tool_bodies, self.sim.tool_contact_force) \
@@ -261,8 +321,8 @@ class ScriptProgram:
     def set_analog_out(self, pin: int, fraction: float) -> None:
         self.sim.io = self.sim.io.with_analog_out(pin, fraction)
 
-    def set_payload(self, mass: float, cog: list[float]) -> None:
-        self.sim.set_payload(mass, np.array(cog), np.zeros(6))
+    def set_payload(self, mass: float, cog: list[float], inertia: list[float] | None = None) -> None:
+        self.sim.set_payload(mass, np.array(cog), np.zeros(6) if inertia is None else np.array(inertia))
 
     def registers(self):
         return self.robot.registers

@@ -20,7 +20,7 @@ from dataclasses import dataclass, field
 from typing import Any
 
 from ur_sim_driver.errors import ScriptError
-from ur_sim_driver.urscript.values import PENDING, Request, ThreadHandle
+from ur_sim_driver.urscript.values import PENDING, Request, ThreadHandle, is_number, show
 
 SLEEP_TOLERANCE = 1e-9  # [s] a sleep this close to its end is over
 
@@ -89,9 +89,13 @@ class Threads:
         return thread
 
     def find(self, handle, what: str) -> ScriptThread | None:
-        """The thread of `handle` (None when it has ended); ScriptError when `handle` is no thread handle."""
+        """The thread of `handle` (None when it has ended, or for a number: programs keep 0 in a handle's variable
+        while no thread runs, and ur_rtde's script kills such variables as they are); ScriptError when `handle` is
+        neither."""
+        if is_number(handle):
+            return None
         if not isinstance(handle, ThreadHandle):
-            raise ScriptError(f'{what}: {handle!r} is not a thread handle (what run returns)')
+            raise ScriptError(f'{what}: {show(handle)} is not a thread handle (what run returns)')
         return next((t for t in self.all if t.number == handle.number), None)
 
     def kill(self, thread: ScriptThread) -> None:

@@ -79,9 +79,9 @@ class ThreadHandle:
 
 @dataclass(frozen=True)
 class Request:
-    """What a thread waits for: `kind` ('move', 'sleep', 'sync', 'join', 'wait', or 'start': a move that returns at
-    once) and its arguments (a move's: its name and the URScript arguments, resolved; a join's: the condition; a
-    wait's: a poll that returns PENDING until it returns the call's value)."""
+    """What a thread waits for: `kind` ('move', 'sleep', 'sync', 'join' or 'wait') and its arguments (a move's: its
+    name and the URScript arguments, resolved; a join's: the condition; a wait's: a poll that returns PENDING until
+    it returns the call's value)."""
 
     kind: str
     args: tuple = ()
