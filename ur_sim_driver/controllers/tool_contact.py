@@ -59,6 +59,7 @@ class ToolContactController(Component):
     def __init__(self) -> None:
         super().__init__()
         self._goal: _Goal | None = None  # the active goal (under the lock)
+        self._unclaimed: _Goal | None = None  # the goal accepted last, until its execution takes it
         self._tool_bodies: frozenset[str] = frozenset()
         self._threshold = TOOL_CONTACT_FORCE
         self.unavailable: str | None = None
@@ -120,7 +121,8 @@ class ToolContactController(Component):
                 reason = BUSY
             else:
                 reason = None
-                self._goal = _Goal(None)  # reserved until accepted: a second goal meanwhile is refused
+                # reserved until accepted: a second goal meanwhile is refused
+                self._goal = self._unclaimed = _Goal(None)
         if reason is not None:
             self.node.get_logger().error(reason)
             return GoalResponse.REJECT
@@ -129,17 +131,20 @@ class ToolContactController(Component):
     def _on_cancel(self, goal_handle) -> CancelResponse:
         with self.host.lock:
             goal = self._goal
-            if goal is not None and goal.handle is goal_handle and goal.outcome is None:
+            # A cancel may come between the goal's acceptance and its execution, while the goal has no handle yet
+            # (the trajectory_until_node cancels both its goals at once): it is this goal, as goals come one at a
+            # time. Ignoring it left the execution waiting for ever.
+            if goal is not None and goal.handle in (goal_handle, None) and goal.outcome is None:
                 self.node.get_logger().info('Cancel tool contact requested.')
                 self._end(CANCELED)
         return CancelResponse.ACCEPT
 
     def _execute(self, goal_handle) -> ToolContact.Result:
         with self.host.lock:
-            goal = self._goal
-            if goal is not None and goal.handle is None:
+            goal, self._unclaimed = self._unclaimed, None
+            if goal is not None:  # cancelled or deactivated since its acceptance: its outcome is set
                 goal.handle = goal_handle
-            else:  # deactivated between acceptance and execution: nothing will end it, it ends here
+            else:  # no goal of ours: nothing will end it, it ends here
                 goal = _Goal(goal_handle)
                 goal.outcome = ABORTED
                 goal.done.set()
