@@ -51,7 +51,10 @@ class Box:
             sample, stop = TrajectorySample(state.q, zero, zero, 0, True), state.q
         else:
             sample, stop = program.command(state, self.sim.control_dt)
-        self.sim.advance(state, sample, stop)
+        if program is not None and program.free:  # freedrive: as the simulation loop does
+            self.sim.advance_free(state)
+        else:
+            self.sim.advance(state, sample, stop)
         self.runner.after_cycle()
         self.q.append(self.sim.state().q)
         self.tcp.append(self.sim.tcp_pose()[0])

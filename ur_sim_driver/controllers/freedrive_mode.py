@@ -27,7 +27,6 @@ from ur_sim_driver.controllers.ur_hardware import FREEDRIVE
 from ur_sim_driver.motion.trajectory import TrajectorySample
 from ur_sim_driver.physics.physics import ArmState
 from ur_sim_driver.robot.sim_config import SimConfig
-from ur_sim_driver.robot.simulator import BRAKE_CAPABILITY
 
 NAME = 'freedrive_mode_controller'
 TYPE = 'ur_controllers/FreedriveModeController'
@@ -82,9 +81,7 @@ class FreedriveModeController(JointCommandController):
 
     def _stopping_point(self, state: ArmState) -> np.ndarray:
         # Leaving freedrive while the arm moves: it holds where it can stop, braking as hard as the robot does.
-        sim = self.host.sim
-        a = BRAKE_CAPABILITY * sim.a_max
-        return np.clip(state.q + state.qd * np.abs(state.qd) / (2.0 * a), sim.params.q_min, sim.params.q_max)
+        return self.host.sim.stopping_point(state)
 
     def command(self, state: ArmState, period: float) -> tuple[TrajectorySample, np.ndarray | None]:
         log = self.node.get_logger()

@@ -179,6 +179,11 @@ class ArmPhysics:
         mujoco.mj_jacSubtreeCom(m, d, self._jac, self._arm_root)
         return -float(m.body_subtreemass[self._arm_root]) * (self._jac[:, self._i_dof].T @ g_world)
 
+    def coriolis_torques(self) -> np.ndarray:
+        """(n,) the Coriolis and centrifugal torques [N m] at the current state: MuJoCo's bias forces less
+        gravity's."""
+        return self._d_bias[self._i_dof] - self.gravity_torques(self.gravity_in_base())
+
     def point_gravity_torques(self, mass: float, point: np.ndarray, g_base: np.ndarray) -> np.ndarray:
         """(n,) joint torques [N m] that hold a point mass `mass` [kg] carried by the flange at `point` (3,) [m] in
         tool0 still under a gravitational acceleration `g_base` (3,) [m/s^2] in the base frame (the arm's own

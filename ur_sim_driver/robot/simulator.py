@@ -205,6 +205,12 @@ class Simulator:
             self._felt_scales = None
             self.physics.set_joint_friction(self.params.damping, np.zeros_like(self.params.coulomb))
 
+    def stopping_point(self, state: ArmState) -> np.ndarray:
+        """(n,) where the arm, moving at `state`, comes to rest braking as hard as the robot does (leaving
+        freedrive), within the joint limits [rad]."""
+        a = BRAKE_CAPABILITY * self.a_max
+        return np.clip(state.q + state.qd * np.abs(state.qd) / (2.0 * a), self.params.q_min, self.params.q_max)
+
     def gravity_compensation(self) -> np.ndarray:
         """(n,) the torques [N m] with which the robot's controller holds the arm up at rest: its model of arm and
         tool with the payload it believes mounted (set_payload), under the gravity it believes in (set_gravity)."""

@@ -11,6 +11,7 @@ import numpy as np
 
 from ur_sim_driver.errors import ScriptError
 from ur_sim_driver.robot.registers import N_BITS, N_DOUBLES, N_INTS
+from ur_sim_driver.urscript.mode_functions import mode_functions
 from ur_sim_driver.urscript.socket_functions import socket_functions
 from ur_sim_driver.urscript.state_functions import state_functions
 from ur_sim_driver.urscript.values import (
@@ -112,6 +113,7 @@ def builtins(robot) -> dict[str, tuple[list, Callable]]:
         'stopl': ([('a', R), ('aRot', None)], move('stopl')),
         'servoj': ([('q', R), ('a', 0.0), ('v', 0.0), ('t', 0.002), ('lookahead_time', 0.1), ('gain', 300.0)],
                    move('servoj')),
+        'servoc': ([('pose', R), ('a', 1.2), ('v', 0.25), ('r', 0.0)], move('servoc')),
         'sleep': ([('t', R)], sleep),
         'sync': ([], lambda: Request('sync')),
         'textmsg': ([('s1', R), ('s2', '')], textmsg),
@@ -162,4 +164,5 @@ def builtins(robot) -> dict[str, tuple[list, Callable]]:
         table[f'write_output_{kind}_register'] = register(kind, 'output', write=True)
     table.update(socket_functions(robot))
     table.update(state_functions(robot))
+    table.update(mode_functions(robot))
     return table

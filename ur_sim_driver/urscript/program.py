@@ -28,6 +28,7 @@ from ur_sim_driver.urscript.moves import JointLine, Move, Servo, Speed, ToolLine
 from ur_sim_driver.urscript.values import Pose, Request, is_number, show
 
 END_DECELERATION = 2.0  # [rad/s^2] a program that ends while the arm moves at speed stops it with this
+STEADY_SPEED = 1e-3  # [rad/s] is_steady(): every joint slower than this, and no motion commanded
 HISTORY = 1250  # control cycles of actual joint positions kept for get_actual_joint_positions_history
 _DH_FROM_BASE_LINK = np.diag([-1.0, -1.0, 1.0, 1.0])  # the controller's base frame is DH frame 0
 
@@ -65,6 +66,7 @@ class ScriptProgram:
         self._cycle = 0  # control cycles the program has run
         self._touch_from: int | None = None  # the cycle a tool contact began (tool_contact)
         self.force_settings = {'gain_scaling': 1.0, 'damping': 0.005}  # force_mode_set_gain_scaling, _damping
+        self.free = False  # freedrive (teach mode): the robot holds the arm up and lets it be moved
         self._qd_nominal: np.ndarray | None = None  # the current move's velocity this cycle [rad/s]
 
     # ---- the commander ------------------------------------------------------------------------------------
@@ -77,6 +79,9 @@ class ScriptProgram:
             self.take_over(state)
         self._history.append(state.q.copy())
         self._cycle += 1
+        if self.free:  # where the arm is pushed to is where it holds when freedrive ends
+            zero = np.zeros_like(state.q)
+            self._ref = TrajectorySample(state.q.copy(), zero, zero.copy(), 0, True)
         factor = self._factor()
         current = self._move
         if current is not None:  # where the current move is now: a move the program starts this cycle starts there
@@ -174,14 +179,16 @@ class ScriptProgram:
 
     # ---- moves --------------------------------------------------------------------------------------------
     def _build(self, kind: str, *args) -> Move:
+        if self.free:
+            raise ScriptError(f'{kind}: the robot is in freedrive; end_freedrive_mode() or end_teach_mode() first')
         q0 = self._ref.positions.copy()
         p = self.sim.params
         if kind == 'movej':
             target, a, v, t, _r = args
             q1 = self._joints(kind, target, q0)
             return JointLine(q0, q1, _positive(f'{kind}: a', a), _positive(f'{kind}: v', v), _time(kind, t))
-        if kind == 'movel':
-            target, a, v, t, _r = args
+        if kind in ('movel', 'servoc'):  # servoc: a line to the pose at v, as movel (its blend r is not used)
+            target, a, v, t, _r = args if kind == 'movel' else (*args[:3], 0.0, args[3])
             t1 = target.matrix() if isinstance(target, Pose) else self.ik.fk(_joints6(kind, target))
             return ToolLine(self.ik, q0, self.ik.fk(q0), t1, _positive(f'{kind}: a', a), _positive(f'{kind}: v', v),
                             _time(kind, t), self.sim.control_dt, p.q_min, p.q_max)
@@ -294,6 +301,44 @@ class ScriptProgram:
         if self._touch_from is None:
             self._touch_from = self._cycle
         return self._cycle - self._touch_from + 1
+
+    def target_qdd(self) -> np.ndarray:
+        return self._ref.accelerations if self._ref is not None else np.zeros(len(self.sim.state().q))
+
+    def mass_matrix(self) -> np.ndarray:
+        """(n, n) [kg m^2] at the actual joints, with the tool and the mounted payload."""
+        return self.sim.physics.dynamics()[0]
+
+    def coriolis(self) -> np.ndarray:
+        return self.sim.physics.coriolis_torques()
+
+    def jacobian_rate(self, q: np.ndarray, qd: np.ndarray, step: float = 1e-6) -> np.ndarray:
+        """(6, n) d/dt of the tool Jacobian moving at `qd` [rad/s], by central differences along the motion."""
+        return (tool_jacobian(self.ik, q + step * qd) - tool_jacobian(self.ik, q - step * qd)) / (2.0 * step)
+
+    def steady(self) -> bool:
+        """The arm at rest: no motion commanded and the joints slower than STEADY_SPEED."""
+        return self.move_finished() and float(np.abs(self.sim.state().qd).max()) < STEADY_SPEED
+
+    def set_free(self, free: bool) -> None:
+        """Enter or leave freedrive: the current move ends; leaving it, the arm holds where it can stop from the speed
+        it was pushed to, braking as hard as the robot does (as /freedrive_mode_controller's end)."""
+        if free:
+            self._move = None
+        elif self.free:
+            hold = self.sim.stopping_point(self.sim.state())
+            zero = np.zeros_like(hold)
+            self._ref = TrajectorySample(hold, zero, zero.copy(), 0, True)
+        self.free = free
+
+    def protective_stop(self) -> None:
+        self.robot.protective_stop(self.sim.time, 'protective_stop() called by the program')
+
+    def zero_ftsensor(self) -> None:
+        self.sim.zero_ftsensor()
+
+    def set_gravity(self, anti_gravity: list[float]) -> None:
+        self.sim.set_gravity(np.array(anti_gravity, float))
 
     def payload(self) -> tuple[float, list[float], list[float]]:
         """What the robot believes is mounted: mass [kg], cog (tool0) [m], inertia (6,) [kg m^2]."""

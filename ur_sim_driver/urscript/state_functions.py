@@ -113,6 +113,13 @@ def state_functions(robot) -> dict[str, tuple[list, Callable]]:
         'get_target_payload': ([], lambda: robot.payload()[0]),
         'get_target_payload_cog': ([], lambda: robot.payload()[1]),
         'get_target_payload_inertia': ([], lambda: robot.payload()[2]),
+        'get_target_joint_accelerations': ([], lambda: _list(robot.target_qdd())),
+        'get_mass_matrix': ([], lambda: [_list(row) for row in robot.mass_matrix()]),
+        'get_coriolis_and_centrifugal_torques': ([], lambda: _list(robot.coriolis())),
+        'get_jacobian_time_derivative': ([], lambda: [_list(row) for row in robot.jacobian_rate(robot.actual_q(),
+                                                                                                 robot.actual_qd())]),
+        'get_tcp_offset': ([], lambda: Pose((0.0,) * 6)),  # ur_sim's TCP is tool0 (set_tcp is not run yet)
+        'is_steady': ([], lambda: robot.steady()),
         'force_mode_set_gain_scaling': ([('scaling', R)], gain_scaling),
         'force_mode_set_damping': ([('damping', R)], damping),
     }

@@ -1,0 +1,44 @@
+"""URScript's functions that change how the robot behaves rather than where it goes: freedrive and teach mode (the
+robot holds the arm up against gravity and lets it be pushed, as ``/freedrive_mode_controller`` does), the
+force-torque sensor's zero, the gravity the controller believes in, and a protective stop called by the program.
+What they do goes through the program's robot (``program.py``)."""
+from __future__ import annotations
+
+from collections.abc import Callable
+
+from ur_sim_driver.errors import ScriptError
+from ur_sim_driver.urscript.values import REQUIRED, Pose, is_number, show
+
+
+def _axes(value) -> list[int]:
+    if not isinstance(value, list) or len(value) != 6 or not all(v in (0, 1) for v in value):
+        raise ScriptError(f'freedrive_mode: freeAxes is a list of six 0 or 1; got {show(value)}')
+    return [int(v) for v in value]
+
+
+def mode_functions(robot) -> dict[str, tuple[list, Callable]]:
+    """name -> ([(argument, default or REQUIRED)], function), as ``builtins.builtins``."""
+
+    def freedrive_mode(freeAxes=None, feature=None):  # noqa: N803 (the manual's names)
+        axes = _axes([1] * 6 if freeAxes is None else freeAxes)
+        if feature is not None and not isinstance(feature, Pose):
+            raise ScriptError(f'freedrive_mode: feature is a pose; got {show(feature)}')
+        if axes != [1] * 6:
+            raise ScriptError('freedrive_mode: ur_sim frees all six axes only (freeAxes [1, 1, 1, 1, 1, 1]); '
+                              f'got {axes}')
+        robot.set_free(True)
+
+    def set_gravity(d):
+        if not isinstance(d, list) or len(d) != 3 or not all(is_number(v) for v in d):
+            raise ScriptError(f'set_gravity: d is a list of 3 numbers [m/s^2]; got {show(d)}')
+        robot.set_gravity([float(v) for v in d])
+
+    return {
+        'freedrive_mode': ([('freeAxes', None), ('feature', None)], freedrive_mode),
+        'end_freedrive_mode': ([], lambda: robot.set_free(False)),
+        'teach_mode': ([], lambda: robot.set_free(True)),
+        'end_teach_mode': ([], lambda: robot.set_free(False)),
+        'zero_ftsensor': ([], lambda: robot.zero_ftsensor()),
+        'set_gravity': ([('d', REQUIRED)], set_gravity),
+        'protective_stop': ([], lambda: robot.protective_stop()),
+    }
