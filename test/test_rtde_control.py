@@ -19,7 +19,7 @@ from scipy.spatial.transform import Rotation
 from script_box import READY, Box
 from sim_harness import running_sim, wait_still
 
-from ur_sim_driver.robot.robot_state import PLAYING, STOPPED
+from ur_sim_driver.robot.robot_state import PLAYING, PROTECTIVE_STOP, STOPPED
 from ur_sim_driver.urscript.runner import RUNTIME_ERROR, STARTED
 from ur_sim_driver.urscript.values import Pose
 
@@ -244,3 +244,60 @@ def test_a_copy_with_its_banner_and_section_comments_changed_runs_the_same(scrip
     target = np.add(READY, [0.3, 0.0, 0.0, 0.0, 0.0, 0.0])
     client.command(1, [*target, 1.0, 2.0], [0])
     assert np.allclose(_q(box), target, atol=2e-3)
+
+
+# ur_rtde 1.6.5's command numbers (RobotCommand::Type) that ur_sim runs, and the ten that stop the script with the
+# function it lacks (docs/ports.md).
+RUNS = (1, 2, 3, 4, 8, 9, 10, 11, 12, 13, 14, 15, 16, 17, 18, 19, 20, 21, 22, 23, 24, 25, 26, 27, 30, 31, 33, 34, 36,
+        37, 39, 40, 41, 42, 43, 44, 45, 46, 47, 48, 49, 50, 51, 52, 53, 55, 58, 59, 60, 61, 62, 63, 64, 65, 67, 68,
+        69, 70, 71, 255)
+LACKS = {6: 'force_mode', 7: 'end_force_mode', 28: 'get_target_waypoint', 29: 'set_tcp', 35: 'rtde_set_watchdog',
+         38: 'get_joint_torques', 54: 'get_freedrive_status', 56: 'ft_rtde_input_enable',
+         57: 'enable_external_ft_sensor'}
+JOINT_ARGUMENTS = (1, 4, 9, 11, 27, 37, 44, 60, 61)  # the first six doubles are joints (else a pose or a speed)
+
+
+def _arguments(box: Box, cmd: int) -> tuple[list[float], list[int]]:
+    """Plausible arguments: a small step from READY (joints or the TCP pose), v 0.5, a 1, t one cycle, lookahead
+    0.1, gain 300; then what a few commands need instead."""
+    q = [float(v) for v in np.add(READY, [0.05, 0.0, 0.0, 0.0, 0.0, 0.0])]
+    pose = list(box.runner.compile('textmsg(1)\n').forward_kin(np.array(READY), None).values)
+    doubles = (q if cmd in JOINT_ARGUMENTS else pose) + [0.5, 1.0, 0.002, 0.1, 300.0] + [0.0] * 37
+    ints = [0] * 7
+    if cmd in (9, 10):  # speedJ, speedL: a small speed, a 1, no time
+        doubles[:8] = [0.01, 0, 0, 0, 0, 0, 1.0, 0.0]
+    elif cmd in (15, 16, 33, 34):  # the stops: a deceleration
+        doubles[0] = 2.0
+    elif cmd in (17, 65):  # the payload: 1 kg, 5 cm out along the flange, no inertia of its own
+        doubles[:10] = [1.0, 0.0, 0.0, 0.05, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0]
+    elif cmd in (20, 21):  # force mode's damping and gain scaling
+        doubles[0] = 0.5
+    elif cmd == 41:  # jog in the base feature
+        doubles[:8] = [0.01, 0, 0, 0, 0, 0, 0.0, 0.5]
+    elif cmd == 51:  # moveUntilContact: 10 mm/s down
+        doubles[:13] = [0, 0, -0.01, 0, 0, 0, 0, 0, 0, 0, 0, 0, 0.5]
+    elif cmd == 52:  # freedrive, every axis free
+        ints = [1] * 7
+    return doubles, ints
+
+
+@pytest.mark.parametrize('cmd', RUNS + tuple(LACKS))
+def test_each_command_runs_or_names_the_function_it_lacks(script, cmd):
+    box = Box()
+    client = Client(box, script)
+    doubles, ints = _arguments(box, cmd)
+    client.send(cmd, doubles, ints[1:])
+    for _ in range(100):  # 0.2 s: every command has been taken and answered (or has failed) by then
+        box.step()
+        if box.runner.current is None:
+            break
+    errors = [e.text for e in box.events if e.kind == RUNTIME_ERROR]
+    if cmd in LACKS:
+        assert len(errors) == 1 and f"unknown function '{LACKS[cmd]}'" in errors[0], errors
+    elif cmd == 255:
+        assert not errors and box.runner.current is None  # stopScript ends it
+    elif cmd == 31:
+        assert not errors and box.runner.current is None  # triggerProtectiveStop: the robot stops the program
+        assert box.robot.safety_mode == PROTECTIVE_STOP
+    else:
+        assert not errors and box.runner.current is not None, errors
