@@ -246,14 +246,15 @@ def test_a_copy_with_its_banner_and_section_comments_changed_runs_the_same(scrip
     assert np.allclose(_q(box), target, atol=2e-3)
 
 
-# ur_rtde 1.6.5's command numbers (RobotCommand::Type) that ur_sim runs, and the ten that stop the script with the
-# function it lacks (docs/ports.md).
-RUNS = (1, 2, 3, 4, 8, 9, 10, 11, 12, 13, 14, 15, 16, 17, 18, 19, 20, 21, 22, 23, 24, 25, 26, 27, 30, 31, 33, 34, 36,
-        37, 39, 40, 41, 42, 43, 44, 45, 46, 47, 48, 49, 50, 51, 52, 53, 55, 58, 59, 60, 61, 62, 63, 64, 65, 67, 68,
-        69, 70, 71, 255)
-LACKS = {6: 'force_mode', 7: 'end_force_mode', 28: 'get_target_waypoint', 29: 'set_tcp', 35: 'rtde_set_watchdog',
+# ur_rtde 1.6.5's command numbers (RobotCommand::Type) that ur_sim runs, the eight that stop the script with the
+# function it lacks, and directTorque, which its script loops on without sync (docs/ports.md): 61 + 8 + 1 = 70.
+RUNS = (1, 2, 3, 4, 8, 9, 10, 11, 12, 13, 14, 15, 16, 17, 18, 19, 20, 21, 22, 23, 24, 25, 26, 27, 29, 30, 31, 33,
+        34, 36, 37, 39, 40, 41, 42, 43, 44, 45, 46, 47, 48, 49, 50, 51, 52, 53, 55, 58, 59, 60, 61, 62, 63, 64, 65,
+        67, 68, 69, 70, 71, 255)
+LACKS = {6: 'force_mode', 7: 'end_force_mode', 28: 'get_target_waypoint', 35: 'rtde_set_watchdog',
          38: 'get_joint_torques', 54: 'get_freedrive_status', 56: 'ft_rtde_input_enable',
          57: 'enable_external_ft_sensor'}
+DIRECT_TORQUE = 66
 JOINT_ARGUMENTS = (1, 4, 9, 11, 27, 37, 44, 60, 61)  # the first six doubles are joints (else a pose or a speed)
 
 
@@ -281,7 +282,7 @@ def _arguments(box: Box, cmd: int) -> tuple[list[float], list[int]]:
     return doubles, ints
 
 
-@pytest.mark.parametrize('cmd', RUNS + tuple(LACKS))
+@pytest.mark.parametrize('cmd', RUNS + tuple(LACKS) + (DIRECT_TORQUE,))
 def test_each_command_runs_or_names_the_function_it_lacks(script, cmd):
     box = Box()
     client = Client(box, script)
@@ -294,6 +295,8 @@ def test_each_command_runs_or_names_the_function_it_lacks(script, cmd):
     errors = [e.text for e in box.events if e.kind == RUNTIME_ERROR]
     if cmd in LACKS:
         assert len(errors) == 1 and f"unknown function '{LACKS[cmd]}'" in errors[0], errors
+    elif cmd == DIRECT_TORQUE:
+        assert len(errors) == 1 and 'infinite loop detected' in errors[0], errors
     elif cmd == 255:
         assert not errors and box.runner.current is None  # stopScript ends it
     elif cmd == 31:

@@ -147,3 +147,31 @@ end''')
     took = box.run('def prog():\n  protective_stop()\n  sleep(1)\nend')
     assert box.robot.safety_mode == PROTECTIVE_STOP and took < 0.01  # the robot stopped the program at once
     assert box.robot.program_state != PLAYING
+
+
+def test_set_tcp_moves_the_tcp_that_poses_moves_and_the_robot_report():
+    box = Box()
+    box.run('''def prog():
+  start = get_actual_tcp_pose()
+  set_tcp(p[0, 0, 0.1, 0, 0, 0.5])
+  textmsg(get_tcp_offset())
+  textmsg(pose_dist(start, get_actual_tcp_pose()))
+  textmsg(pose_dist(start, get_actual_tool_flange_pose()))
+  target = pose_trans(get_actual_tcp_pose(), p[0.05, 0.02, 0, 0, 0, 0])
+  movel(target, a=1.0, v=0.1)
+  textmsg(pose_dist(get_actual_tcp_pose(), target))
+end''')
+    assert not box.errors(), box.errors()
+    assert box.log[0] == 'p[0, 0, 0.1, 0, 0, 0.5]'
+    assert float(box.log[1]) == pytest.approx(0.1, abs=1e-9) and float(box.log[2]) < 1e-9
+    assert float(box.log[3]) < 1e-3
+    # the robot reports the same TCP (what RTDE, the primary interface and /tf tool0_controller read)
+    program = box.runner.compile('textmsg(1)\n')
+    position, _ = box.sim.tcp_pose()
+    assert np.allclose(position, program.forward_kin(box.sim.state().q, None).values[:3], atol=1e-4)
+    # the TCP, not tool0, went along a straight line
+    points = np.array([program.forward_kin(q, None).values[:3] for q in box.q[2:]])
+    line = (points[-1] - points[0]) / np.linalg.norm(points[-1] - points[0])
+    off = (points - points[0]) - np.outer((points - points[0]) @ line, line)
+    assert np.abs(off).max() < 2e-4
+    assert np.allclose(box.sim.tcp_offset, [0, 0, 0.1, 0, 0, 0.5])

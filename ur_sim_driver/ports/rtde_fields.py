@@ -55,9 +55,11 @@ def _pose(host: Host) -> tuple[float, ...]:
 
 def _force(host: Host) -> tuple[float, ...]:
     """The flange's wrench (tool0 axes, ``Simulator.wrench``) in base axes, about the TCP."""
-    r = Rotation.from_quat(host.sim.tcp_pose()[1]).as_matrix()
+    r = Rotation.from_quat(host.sim.physics.tcp_pose()[1]).as_matrix()  # tool0's axes
     w = host.sim.wrench()
-    return _vec(np.concatenate((r @ w[:3], r @ w[3:])))
+    force, torque = r @ w[:3], r @ w[3:]
+    lever = r @ host.sim.tcp_offset[:3]  # from tool0 to the TCP
+    return _vec(np.concatenate((force, torque - np.cross(lever, force))))
 
 
 def _target(host: Host, k: int) -> tuple[float, ...]:
@@ -70,7 +72,7 @@ def _target(host: Host, k: int) -> tuple[float, ...]:
 
 def _target_tcp(host: Host) -> tuple[tuple[float, ...], tuple[float, ...]]:
     """(target_TCP_pose, target_TCP_speed): the TCP where the servo's setpoint puts it, and its twist."""
-    position, rotation, twist = host.sim.physics.tcp_at(np.array(_target(host, 0)), np.array(_target(host, 1)))
+    position, rotation, twist = host.sim.tcp_at(np.array(_target(host, 0)), np.array(_target(host, 1)))
     return _vec(np.concatenate((position, Rotation.from_matrix(rotation).as_rotvec()))), _vec(twist)
 
 
@@ -120,8 +122,8 @@ READERS: dict[str, Callable[[Host], object]] = {
     'actual_current_as_torque': lambda h: _vec(h.sim.state().effort),  # the simulated motors' torques [N m]
     'actual_q': lambda h: _vec(h.sim.state().q),
     'actual_qd': lambda h: _vec(reported_velocity(h.sim.state().qd, h.sim.control_dt)),
-    'actual_TCP_pose': _pose, 'actual_TCP_force': _force, 'tcp_offset': lambda h: (0.0,) * 6,
-    'actual_TCP_speed': lambda h: _vec(h.sim.physics.tcp_velocity()),
+    'actual_TCP_pose': _pose, 'actual_TCP_force': _force, 'tcp_offset': lambda h: _vec(h.sim.tcp_offset),
+    'actual_TCP_speed': lambda h: _vec(h.sim.tcp_velocity()),
     'target_TCP_pose': lambda h: _target_tcp(h)[0], 'target_TCP_speed': lambda h: _target_tcp(h)[1],
     'speed_scaling': lambda h: h.speed_scaling.factor, 'target_speed_fraction': lambda h: h.speed_scaling.slider,
     'robot_mode': lambda h: h.robot.robot_mode, 'safety_mode': lambda h: h.robot.safety_mode,

@@ -5,6 +5,7 @@ import math
 from typing import Protocol
 
 import numpy as np
+from scipy.spatial.transform import Rotation
 
 from ur_sim_driver.description.mjcf import (
     FT_FORCE_SENSOR,
@@ -111,6 +112,8 @@ class Simulator:
         # The robot's IO (immutable; replaced under the simulation lock, read as one snapshot without it).
         self.io = IoBank()
         self.payload: Payload = NO_PAYLOAD  # what the controller believes is mounted (set_payload)
+        self.tcp_offset = np.zeros(6)  # set_tcp: the TCP in tool0 (position [m], rotation vector [rad])
+        self._tcp: tuple[np.ndarray, Rotation] | None = None  # the same, ready to compose (None: tool0)
         self.mounted: Payload = NO_PAYLOAD  # what is mounted (the configuration's mounted_payload)
         if cfg.mounted_payload.mass > 0.0:
             self.mount(cfg.mounted_payload)
@@ -235,9 +238,44 @@ class Simulator:
         acceleration away from the earth as the robot takes it; it replaces the gravity of the controller's model."""
         self.gravity_belief = np.array(anti_gravity, dtype=float)
 
+    def set_tcp(self, offset: np.ndarray) -> None:
+        """The robot's set_tcp (under the simulation lock): the TCP in tool0, position [m] and rotation vector [rad]
+        (6,); every interface reports the TCP there from now on (RTDE, primary, /tcp_pose_broadcaster, /tf
+        tool0_controller)."""
+        offset = np.array(offset, dtype=float)
+        if offset.shape != (6,) or not np.all(np.isfinite(offset)):
+            raise ConfigError(f'set_tcp: the TCP is 6 finite numbers (x, y, z [m], rx, ry, rz [rad]); got {offset}')
+        self.tcp_offset = offset
+        self._tcp = None if not offset.any() else (offset[:3].copy(), Rotation.from_rotvec(offset[3:]))
+
     def tcp_pose(self) -> tuple[np.ndarray, np.ndarray]:
-        """tool0 in the base frame: position (3,) [m], quaternion (x, y, z, w)."""
-        return self.physics.tcp_pose()
+        """The TCP (tool0 unless set_tcp moved it) in the base frame: position (3,) [m], quaternion (x, y, z, w),
+        w >= 0."""
+        position, quat = self.physics.tcp_pose()
+        if self._tcp is None:
+            return position, quat
+        offset, turn = self._tcp
+        r = Rotation.from_quat(quat)
+        out = (r * turn).as_quat()
+        return position + r.apply(offset), (out if out[3] >= 0.0 else -out)
+
+    def tcp_velocity(self) -> np.ndarray:
+        """(6,) the TCP's linear [m/s] and angular [rad/s] velocity now, base axes."""
+        twist = self.physics.tcp_velocity()
+        if self._tcp is None:
+            return twist
+        lever = Rotation.from_quat(self.physics.tcp_pose()[1]).apply(self._tcp[0])
+        return np.concatenate((twist[:3] + np.cross(twist[3:], lever), twist[3:]))
+
+    def tcp_at(self, q: np.ndarray, qd: np.ndarray) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
+        """The TCP's position (3,) [m], rotation (3, 3) and twist (6,) at joints `q` moving at `qd`, base frame."""
+        position, rotation, twist = self.physics.tcp_at(q, qd)
+        if self._tcp is None:
+            return position, rotation, twist
+        offset, turn = self._tcp
+        lever = rotation @ offset
+        return (position + lever, rotation @ turn.as_matrix(),
+                np.concatenate((twist[:3] + np.cross(twist[3:], lever), twist[3:])))
 
     def set_payload(self, mass: float, cog: np.ndarray, inertia: np.ndarray) -> None:
         """The robot's set_payload (call under the simulation lock): what the controller believes is mounted.

@@ -294,7 +294,7 @@ class UrSimNode(Node):
                 commander.take_over(hold)
                 sample, stop = commander.command(reported, self.sim.control_dt)
             if self._force_mode.spec is not None:
-                sample, stop = self._force_mode.apply(sample, stop, tcp_position, self.sim.physics.tcp_velocity()[:3],
+                sample, stop = self._force_mode.apply(sample, stop, tcp_position, self.sim.tcp_velocity()[:3],
                                                       tcp_orientation, wrench, self.sim.control_dt)
             torques = commander.torques()
             if getattr(commander, 'free', False):  # freedrive: the robot compensates gravity, the arm is free

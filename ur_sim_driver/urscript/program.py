@@ -54,7 +54,8 @@ class ScriptProgram:
         self.secondary = self.interpreter.secondary
         self.sim, self.robot, self._factor, self._log = sim, robot, factor, log
         self._sockets = sockets
-        self.ik = UrAnalyticIK(sim.params.dh, base_pose=_DH_FROM_BASE_LINK)
+        self._flange_ik = UrAnalyticIK(sim.params.dh, base_pose=_DH_FROM_BASE_LINK)  # tool0
+        self.ik = self._tcp_ik()  # the robot's TCP (set_tcp): what poses, moves and kinematics refer to
         self.error: ScriptError | None = None
         self.finished = False  # the program has ended (and the arm was commanded to rest)
         self.threads = self.interpreter.threads
@@ -276,9 +277,21 @@ class ScriptProgram:
         return self._history[-1 - min(steps, len(self._history) - 1)]
 
     def forward_kin(self, q: np.ndarray, tcp: Pose | None) -> Pose:
-        """The TCP pose at `q`: `tcp` from tool0 (None: the robot's TCP, tool0 in ur_sim)."""
-        t = self.ik.fk(np.asarray(q, float))
-        return Pose.from_matrix(t if tcp is None else t @ tcp.matrix())
+        """The TCP pose at `q`: `tcp` from tool0 (None: the robot's TCP, set_tcp's)."""
+        q = np.asarray(q, float)
+        return Pose.from_matrix(self.ik.fk(q) if tcp is None else self._flange_ik.fk(q) @ tcp.matrix())
+
+    def _tcp_ik(self) -> UrAnalyticIK:
+        return UrAnalyticIK(self.sim.params.dh, tool=Pose(tuple(self.sim.tcp_offset)).matrix(),
+                            base_pose=_DH_FROM_BASE_LINK)
+
+    def set_tcp(self, pose: Pose) -> None:
+        """The robot's TCP from now on, for this program's poses and moves and for every interface."""
+        self.sim.set_tcp(np.array(pose.values))
+        self.ik = self._tcp_ik()
+
+    def tcp_offset(self) -> Pose:
+        return Pose(tuple(float(v) for v in self.sim.tcp_offset))
 
     def jacobian(self, q: np.ndarray) -> np.ndarray:
         return tool_jacobian(self.ik, q)

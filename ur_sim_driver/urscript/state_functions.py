@@ -118,7 +118,8 @@ def state_functions(robot) -> dict[str, tuple[list, Callable]]:
         'get_coriolis_and_centrifugal_torques': ([], lambda: _list(robot.coriolis())),
         'get_jacobian_time_derivative': ([], lambda: [_list(row) for row in robot.jacobian_rate(robot.actual_q(),
                                                                                                  robot.actual_qd())]),
-        'get_tcp_offset': ([], lambda: Pose((0.0,) * 6)),  # ur_sim's TCP is tool0 (set_tcp is not run yet)
+        'get_tcp_offset': ([], lambda: robot.tcp_offset()),
+        'set_tcp': ([('pose', R)], lambda pose: robot.set_tcp(_pose('set_tcp: pose', pose))),
         'is_steady': ([], lambda: robot.steady()),
         'force_mode_set_gain_scaling': ([('scaling', R)], gain_scaling),
         'force_mode_set_damping': ([('damping', R)], damping),
