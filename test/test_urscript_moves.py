@@ -6,7 +6,7 @@ import pytest
 from ur_sim_driver.description.analytic_ik import UrAnalyticIK
 from ur_sim_driver.description.params import load_ur_params
 from ur_sim_driver.errors import ScriptError
-from ur_sim_driver.urscript.moves import JointLine, Speed, ToolLine, Trapezoid
+from ur_sim_driver.urscript.moves import Arc, JointLine, Speed, ToolLine, Trapezoid
 
 DT = 0.002
 P = load_ur_params('ur5e')
@@ -74,3 +74,27 @@ def test_speed_ramps_with_its_acceleration_and_holds():
     assert np.allclose(qd, [0.2, -0.1, 0, 0, 0, 0]) and q[0] == pytest.approx(0.5 * 0.2 * 0.2 + 0.2 * 1.0)
     stop = Speed(q, qd, np.zeros(6), a=2.0, t=None)
     assert stop.duration == pytest.approx(0.1) and np.allclose(stop.sample(0.1)[1], 0.0)
+
+
+def test_an_arc_through_three_points_and_a_movec_along_it():
+    p0, via, p1 = np.array([0.3, 0.0, 0.2]), np.array([0.4, 0.1, 0.2]), np.array([0.5, 0.0, 0.2])
+    arc = Arc.through(p0, via, p1)
+    assert arc.radius == pytest.approx(0.1) and np.allclose(arc.centre, [0.4, 0.0, 0.2])
+    assert arc.angle == pytest.approx(np.pi)  # half a circle, through the via point
+    points = arc.position(np.linspace(0.0, 1.0, 9))
+    assert np.allclose(points[0], p0) and np.allclose(points[4], via) and np.allclose(points[-1], p1)
+    with pytest.raises(ScriptError, match='lie on a line'):
+        Arc.through(p0, (p0 + p1) / 2, p1)
+    # movec from the arm's pose: a quarter circle of radius 5 cm in the base's x-y plane, orientation kept
+    t0 = IK.fk(Q0)
+    start = t0[:3, 3]
+    centre = start + [0.05, 0.0, 0.0]
+    t_via, t1 = t0.copy(), t0.copy()
+    t_via[:3, 3] = centre + 0.05 * np.array([-np.cos(np.pi / 4), np.sin(np.pi / 4), 0.0])
+    t1[:3, 3] = centre + [0.0, 0.05, 0.0]
+    arc = Arc.through(start, t_via[:3, 3], t1[:3, 3])
+    move = ToolLine(IK, Q0, t0, t1, 1.2, 0.1, 0.0, DT, P.q_min, P.q_max, arc=arc, name='movec')
+    tcp = IK.fk(move.q)[:, :3, 3]
+    assert np.allclose(np.linalg.norm(tcp - centre, axis=1), 0.05, atol=1e-6)
+    assert np.allclose(tcp[-1], t1[:3, 3], atol=1e-6)
+    assert move.duration == pytest.approx(0.05 * np.pi / 2 / 0.1 + 0.1 / 1.2, rel=1e-6)  # way / v + v / a

@@ -221,3 +221,33 @@ end''')
     expected = np.array([0.05, 0.0, -0.02]) * (0.05 + 0.9 + 0.05)
     assert np.allclose(moved, expected, atol=1e-3), moved
     assert np.abs(box.sim.state().qd).max() < 1e-2
+
+
+def test_text_lists_popups_and_the_tool_voltage():
+    box = Box()
+    box.run('''def prog():
+  textmsg(str_cat("q=", [1, 2.5]))
+  textmsg(str_cat(to_str(p[0.1, 0, 0, 0, 0, 0]), to_str(True)))
+  textmsg(get_list_length([1, 2, 3]), get_list_length([]))
+  popup("check the gripper", title="Cell", warning=True, blocking=True)
+  set_tool_voltage(24)
+end''')
+    assert box.log == ['q=[1, 2.5]', 'p[0.1, 0, 0, 0, 0, 0]True', '30', 'popup (warning) Cell: check the gripper']
+    assert box.sim.io.tool_voltage == 24
+    box = Box()
+    box.run('def prog():\n  set_tool_voltage(5)\nend')
+    assert 'set_tool_voltage: voltage 5' in box.errors()[0].text and 'not one of 0, 12, 24 V' in box.errors()[0].text
+
+
+def test_movec_moves_the_tcp_on_the_arc_through_the_via_point():
+    box = Box()
+    box.run('''def prog():
+  start = get_actual_tcp_pose()
+  via = pose_add(start, p[0.05, 0.05, 0, 0, 0, 0])
+  to = pose_add(start, p[0.1, 0, 0, 0, 0, 0])
+  movec(via, to, a=1.2, v=0.1)
+  textmsg(pose_dist(get_actual_tcp_pose(), to) < 0.001)
+  movep(start, a=1.2, v=0.1)
+  textmsg(pose_dist(get_actual_tcp_pose(), start) < 0.001)
+end''')
+    assert box.log == ['True', 'True'], box.errors()

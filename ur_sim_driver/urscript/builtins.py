@@ -10,6 +10,7 @@ from collections.abc import Callable
 import numpy as np
 
 from ur_sim_driver.errors import ScriptError
+from ur_sim_driver.robot.io_bank import tool_voltage_refusal
 from ur_sim_driver.robot.registers import N_BITS, N_DOUBLES, N_INTS
 from ur_sim_driver.urscript.mode_functions import mode_functions
 from ur_sim_driver.urscript.socket_functions import socket_functions
@@ -18,6 +19,7 @@ from ur_sim_driver.urscript.values import (
     REQUIRED,
     Pose,
     Request,
+    ThreadHandle,
     is_number,
     pose_add,
     pose_dist,
@@ -104,7 +106,34 @@ def builtins(robot) -> dict[str, tuple[list, Callable]]:
             return float(np.linalg.norm(_vector('norm: a', a, len(a.values if isinstance(a, Pose) else a))))
         return abs(_number('norm: a', a))
 
+    def text(name: str, value) -> str:
+        if isinstance(value, ThreadHandle):
+            raise ScriptError(f'{name}: a thread handle has no text')
+        return show(value)
+
+    def list_length(v):
+        if not isinstance(v, (list, Pose)):
+            raise ScriptError(f'get_list_length: v is a list; got {show(v)}')
+        return len(v.values if isinstance(v, Pose) else v)
+
+    def popup(s, title='Popup', warning=False, error=False, blocking=False):
+        # No one can press a button on a simulated teach pendant: the message goes to the log and the program goes
+        # on, even when `blocking` asks it to wait.
+        level = 'error' if truth(error) else 'warning' if truth(warning) else 'message'
+        robot.textmsg(f'popup ({level}) {show(title)}: {show(s)}')
+
+    def tool_voltage(voltage):
+        refusal = tool_voltage_refusal(voltage) if is_number(voltage) else 'a number of volts: 0, 12 or 24'
+        if refusal is not None:
+            raise ScriptError(f'set_tool_voltage: voltage {show(voltage)}: {refusal}')
+        robot.set_tool_voltage(int(voltage))
+
     table = {
+        'str_cat': ([('op1', R), ('op2', R)], lambda a, b: text('str_cat', a) + text('str_cat', b)),
+        'to_str': ([('val', R)], lambda v: text('to_str', v)),
+        'get_list_length': ([('v', R)], list_length),
+        'popup': ([('s', R), ('title', 'Popup'), ('warning', False), ('error', False), ('blocking', False)], popup),
+        'set_tool_voltage': ([('voltage', R)], tool_voltage),
         'movej': ([('q', R), ('a', 1.4), ('v', 1.05), ('t', 0.0), ('r', 0.0)], move('movej')),
         'movel': ([('pose', R), ('a', 1.2), ('v', 0.25), ('t', 0.0), ('r', 0.0)], move('movel')),
         'speedj': ([('qd', R), ('a', R), ('t', None)], move('speedj')),
@@ -114,6 +143,9 @@ def builtins(robot) -> dict[str, tuple[list, Callable]]:
         'servoj': ([('q', R), ('a', 0.0), ('v', 0.0), ('t', 0.002), ('lookahead_time', 0.1), ('gain', 300.0)],
                    move('servoj')),
         'servoc': ([('pose', R), ('a', 1.2), ('v', 0.25), ('r', 0.0)], move('servoc')),
+        'movep': ([('pose', R), ('a', 1.2), ('v', 0.25), ('r', 0.0)], move('movep')),
+        'movec': ([('pose_via', R), ('pose_to', R), ('a', 1.2), ('v', 0.25), ('r', 0.0), ('mode', 0)],
+                  move('movec')),
         'sleep': ([('t', R)], sleep),
         'sync': ([], lambda: Request('sync')),
         'textmsg': ([('s1', R), ('s2', '')], textmsg),

@@ -128,13 +128,53 @@ class Speed(Move):
         return q_ramp + self.qd1 * (t - r), self.qd1.copy(), np.zeros_like(self.qd1)
 
 
+@dataclass(frozen=True)
+class Arc:
+    """A circle's arc in the base frame: centre (3,) [m], radius [m], unit vectors `u` (to the start) and `w`
+    (in the plane, a quarter turn on), and the angle swept [rad] from the start to the end."""
+
+    centre: np.ndarray
+    radius: float
+    u: np.ndarray
+    w: np.ndarray
+    angle: float
+
+    @staticmethod
+    def through(p0: np.ndarray, via: np.ndarray, p1: np.ndarray) -> Arc:
+        """The arc from p0 through `via` to p1; ScriptError when the three points lie on a line."""
+        a, b = via - p0, p1 - p0
+        normal = np.cross(a, b)
+        area = float(np.linalg.norm(normal))
+        if area < 1e-9:
+            raise ScriptError('movec: the start, the via point and the end lie on a line (no circle through them)')
+        normal /= area
+        # the circumcentre of the triangle (p0, via, p1)
+        centre = p0 + (np.dot(a, a) * np.cross(b, normal) - np.dot(b, b) * np.cross(a, normal)) / (2.0 * area)
+        radius = float(np.linalg.norm(p0 - centre))
+        u = (p0 - centre) / radius
+        w = np.cross(normal, u)
+
+        def angle_of(p):
+            r = p - centre
+            return math.atan2(float(np.dot(r, w)), float(np.dot(r, u))) % (2.0 * math.pi)
+        return Arc(centre, radius, u, w, angle_of(p1))  # via lies between: the sweep from u turns towards w
+
+    def position(self, s: np.ndarray) -> np.ndarray:
+        """(n, 3) points at the fractions `s` (n,) of the arc."""
+        phi = s[:, None] * self.angle
+        return self.centre + self.radius * (np.cos(phi) * self.u + np.sin(phi) * self.w)
+
+
 class ToolLine(Move):
-    """movel: the tool from pose T0 to T1 (4, 4) in the base frame, joints by IK from q0's branch, sampled on the
-    control period's grid at build time (and checked: every sample reachable and within the joint limits)."""
+    """movel (movep, servoc): the tool from pose T0 to T1 (4, 4) in the base frame, joints by IK from q0's branch,
+    sampled on the control period's grid at build time (and checked: every sample reachable and within the joint
+    limits). With an `arc` (movec) the tool goes along it; its orientation turns from T0's to T1's, or, with
+    `fixed` (movec's mode 1), turns with the arc's tangent."""
 
     def __init__(self, ik: UrAnalyticIK, q0: np.ndarray, t0: np.ndarray, t1: np.ndarray, a: float, v: float,
-                 t: float, dt: float, q_min: np.ndarray, q_max: np.ndarray) -> None:
-        way = float(np.linalg.norm(t1[:3, 3] - t0[:3, 3]))
+                 t: float, dt: float, q_min: np.ndarray, q_max: np.ndarray, arc: Arc | None = None,
+                 fixed: bool = False, name: str = 'movel') -> None:
+        way = float(np.linalg.norm(t1[:3, 3] - t0[:3, 3])) if arc is None else arc.radius * arc.angle
         rotations = Rotation.from_matrix(np.stack([t0[:3, :3], t1[:3, :3]]))
         angle = float((rotations[0].inv() * rotations[1]).magnitude())
         self.profile = Trapezoid.build(way if way > 1e-6 else angle, a, v, t)
@@ -144,8 +184,15 @@ class ToolLine(Move):
         length = self.profile.distance
         s = np.array([self.profile.sample(ti)[0] / length if length > 0 else 1.0 for ti in self.times])
         poses = np.tile(np.eye(4), (n, 1, 1))
-        poses[:, :3, 3] = t0[:3, 3] + s[:, None] * (t1[:3, 3] - t0[:3, 3])
-        poses[:, :3, :3] = Slerp([0.0, 1.0], rotations)(s).as_matrix()
+        if arc is None:
+            poses[:, :3, 3] = t0[:3, 3] + s[:, None] * (t1[:3, 3] - t0[:3, 3])
+        else:
+            poses[:, :3, 3] = arc.position(s)
+        if fixed and arc is not None:  # turning with the tangent: about the circle's normal
+            normal = np.cross(arc.u, arc.w)
+            poses[:, :3, :3] = (Rotation.from_rotvec(np.outer(s * arc.angle, normal)) * rotations[0]).as_matrix()
+        else:
+            poses[:, :3, :3] = Slerp([0.0, 1.0], rotations)(s).as_matrix()
         solutions = ik.solve(poses)  # (n, 8, 6), NaN where unreachable
         q = np.empty((n, len(q0)))
         previous = np.asarray(q0, float)
@@ -153,13 +200,13 @@ class ToolLine(Move):
             branch, _ = nearest_branch(solutions[k], previous)
             candidate = solutions[k, branch]
             if not np.all(np.isfinite(candidate)):
-                raise ScriptError(f'movel: the pose at {100 * s[k]:.0f} % of the way is out of reach')
+                raise ScriptError(f'{name}: the pose at {100 * s[k]:.0f} % of the way is out of reach')
             previous = previous + _wrap(candidate - previous)  # the nearest turn of each joint
             q[k] = previous
         outside = np.flatnonzero(np.any((q < q_min) | (q > q_max), axis=0))
         if outside.size:
             j = int(outside[0])
-            raise ScriptError(f'movel: joint {j} would leave its limits [{q_min[j]:.4f}, {q_max[j]:.4f}] rad '
+            raise ScriptError(f'{name}: joint {j} would leave its limits [{q_min[j]:.4f}, {q_max[j]:.4f}] rad '
                               f'on the way (reaching {q[:, j].min():.4f} .. {q[:, j].max():.4f})')
         self.q = q
         self.qd = np.gradient(q, self.times, axis=0) if n > 2 else np.zeros_like(q)

@@ -24,7 +24,7 @@ from ur_sim_driver.robot.robot_state import RobotState
 from ur_sim_driver.robot.simulator import Simulator
 from ur_sim_driver.urscript.grammar import parse
 from ur_sim_driver.urscript.interpreter import Interpreter
-from ur_sim_driver.urscript.moves import JointLine, Move, Servo, Speed, ToolLine, ToolSpeed, tool_jacobian
+from ur_sim_driver.urscript.moves import Arc, JointLine, Move, Servo, Speed, ToolLine, ToolSpeed, tool_jacobian
 from ur_sim_driver.urscript.values import Pose, Request, is_number, show
 
 END_DECELERATION = 2.0  # [rad/s^2] a program that ends while the arm moves at speed stops it with this
@@ -188,11 +188,20 @@ class ScriptProgram:
             target, a, v, t, _r = args
             q1 = self._joints(kind, target, q0)
             return JointLine(q0, q1, _positive(f'{kind}: a', a), _positive(f'{kind}: v', v), _time(kind, t))
-        if kind in ('movel', 'servoc'):  # servoc: a line to the pose at v, as movel (its blend r is not used)
+        if kind in ('movel', 'movep', 'servoc'):  # movep, servoc: a line to the pose at v (their blend is not used)
             target, a, v, t, _r = args if kind == 'movel' else (*args[:3], 0.0, args[3])
-            t1 = target.matrix() if isinstance(target, Pose) else self.ik.fk(_joints6(kind, target))
-            return ToolLine(self.ik, q0, self.ik.fk(q0), t1, _positive(f'{kind}: a', a), _positive(f'{kind}: v', v),
-                            _time(kind, t), self.sim.control_dt, p.q_min, p.q_max)
+            return ToolLine(self.ik, q0, self.ik.fk(q0), self._pose_matrix(kind, target), _positive(f'{kind}: a', a),
+                            _positive(f'{kind}: v', v), _time(kind, t), self.sim.control_dt, p.q_min, p.q_max,
+                            name=kind)
+        if kind == 'movec':
+            via, target, a, v, _r, mode = args
+            if mode not in (0, 1):
+                raise ScriptError(f'movec: mode is 0 (orientation from start to end) or 1 (fixed to the arc); '
+                                  f'got {show(mode)}')
+            t0, t_via, t1 = self.ik.fk(q0), self._pose_matrix(kind, via), self._pose_matrix(kind, target)
+            arc = Arc.through(t0[:3, 3], t_via[:3, 3], t1[:3, 3])
+            return ToolLine(self.ik, q0, t0, t1, _positive(f'{kind}: a', a), _positive(f'{kind}: v', v), 0.0,
+                            self.sim.control_dt, p.q_min, p.q_max, arc=arc, fixed=mode == 1, name=kind)
         if kind == 'speedj':
             qd, a, t = args
             qd = np.array(_joints6(f'{kind}: qd', qd))
@@ -217,6 +226,10 @@ class ScriptProgram:
             target, _a, _v, t, _lookahead, _gain = args
             return Servo(q0, self._joints(kind, target, q0), _positive(f'{kind}: t', t))
         raise ScriptError(f'{kind} is not supported by ur_sim')
+
+    def _pose_matrix(self, kind: str, target) -> np.ndarray:
+        """A move's target as a TCP pose (4, 4): a pose as it is, joints by forward kinematics."""
+        return target.matrix() if isinstance(target, Pose) else self.ik.fk(_joints6(kind, target))
 
     def _tool_twist(self) -> np.ndarray:
         """(6,) the tool's nominal twist now (linear [m/s], angular [rad/s]; base axes)."""
@@ -375,6 +388,9 @@ class ScriptProgram:
 
     def digital_in(self, pin: int) -> bool:
         return bool(self.sim.io.digital_in[pin])
+
+    def set_tool_voltage(self, volts: int) -> None:
+        self.sim.io = self.sim.io.with_tool_voltage(volts)
 
     def set_analog_out(self, pin: int, fraction: float) -> None:
         self.sim.io = self.sim.io.with_analog_out(pin, fraction)
