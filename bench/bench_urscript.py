@@ -4,9 +4,9 @@ interpret, with the simulated arm stepped as the simulation loop steps it (``tes
 The program is ours, in the shape of the programs client libraries send (ur_rtde's control script is one): a main
 loop that reads a command from the input registers, tells streamed commands from the others by a chain of
 comparisons, dispatches it through an if/elif chain, reads six joint targets through small functions, hands them to
-a servo thread under a critical section and syncs; the servo thread calls ``servoj`` every cycle. Reported: the mean and p99 time of a cycle with
-the program, of a cycle without one (the arm held), and their difference, the interpreter's share [ms]; how many
-times real time the program runs in lockstep at the e-Series' 500 Hz.
+a servo thread under a critical section and syncs; the servo thread calls ``servoj`` every cycle. Reported: the
+mean and p99 time of a cycle with the program, of a cycle without one (the arm held), and their difference, the
+interpreter's share [ms]; how many times real time the program runs in lockstep at the e-Series' 500 Hz.
 """
 from __future__ import annotations
 

@@ -738,6 +738,7 @@ def running_sim(lockstep: bool | None = None, paced: bool = False, ros_args: lis
     params.setdefault('primary', {'port': 0})
     params.setdefault('secondary', {'port': 0})
     params.setdefault('realtime', {'port': 0})
+    params.setdefault('interpreter', {'port': 0})
     with ros_context(ros_args) as ctx:
         sim = UrSimNode(context=ctx, parameter_overrides=[_param(k, v) for k, v in _flatten(params).items()],
                         start=not (lockstep or paced))

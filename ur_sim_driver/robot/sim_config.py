@@ -74,6 +74,8 @@ class SimConfig:
     secondary_port: int = 30002
     realtime_host: str = '127.0.0.1'  # the real-time interface: 30003 as on a UR
     realtime_port: int = 30003
+    interpreter_host: str = '127.0.0.1'  # the interpreter socket (ports/interpreter_port.py): 30020 as on a UR
+    interpreter_port: int = 30020
     tool: str = 'none'
     scene: str = 'empty'
     part_scan_seed: int = 0  # seeds the part scanners' noise (a scene with scanners): the same seed, the same scans
@@ -246,6 +248,8 @@ def sim_config_from_params(params: Mapping[str, Any]) -> SimConfig:
         secondary_port=_integer('secondary.port', get('secondary.port', d.secondary_port), 0, 65535),
         realtime_host=_host('realtime.host', get('realtime.host', d.realtime_host)),
         realtime_port=_integer('realtime.port', get('realtime.port', d.realtime_port), 0, 65535),
+        interpreter_host=_host('interpreter.host', get('interpreter.host', d.interpreter_host)),
+        interpreter_port=_integer('interpreter.port', get('interpreter.port', d.interpreter_port), 0, 65535),
         tool=_choice('tool', get('tool', d.tool), TOOLS),
         scene=_scene(get('scene', d.scene)),
         part_scan_seed=_integer('part_scan_seed', get('part_scan_seed', d.part_scan_seed), 0, 2**31 - 1),
@@ -329,8 +333,8 @@ def _ros_name(parameter: str, value: Any) -> str:
 
 
 # Parameter names ur_sim reads: the configuration's fields, groups read as <group>.<name>, and rclpy's own.
-_GROUPS = ('constraints', 'speed_scaling', 'dashboard_server', 'rtde', 'primary', 'secondary', 'realtime', 'urscript')
-_PORTS = ('dashboard_server', 'rtde', 'primary', 'secondary', 'realtime')
+_PORTS = ('dashboard_server', 'rtde', 'primary', 'secondary', 'realtime', 'interpreter')
+_GROUPS = ('constraints', 'speed_scaling', 'urscript', *_PORTS)
 _GROUPED = {f'{g}_{n}' for g in _PORTS for n in ('host', 'port')}
 _IN_GROUPS = {'initial_scaling_factor', 'allow_remote_sockets'}  # speed_scaling.*, urscript.*
 _KNOWN = (set(SimConfig.__dataclass_fields__) - _IN_GROUPS - _GROUPED) | set(_GROUPS) | {

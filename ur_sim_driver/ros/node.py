@@ -49,6 +49,7 @@ from ur_sim_driver.motion.jtc import TrajectoryController
 from ur_sim_driver.motion.tolerances import default_tolerances
 from ur_sim_driver.physics.physics import ArmState
 from ur_sim_driver.ports.dashboard_port import DashboardPort
+from ur_sim_driver.ports.interpreter_port import InterpreterPort, has_interpreter_socket
 from ur_sim_driver.ports.primary_port import REALTIME, SECONDARY, PrimaryPort
 from ur_sim_driver.ports.rtde_port import RtdePort
 from ur_sim_driver.ports.script_sockets import ScriptSockets
@@ -199,6 +200,10 @@ class UrSimNode(Node):
             self._open_port('real-time interface', 'realtime.port', lambda: PrimaryPort(
                 cfg.realtime_host, cfg.realtime_port, self.host, REALTIME, log=self.get_logger().info)))
             if port is not None]
+        # PolyScope 5.10+ on an e-Series only, as the robot
+        self.interpreter_port = self._open_port('interpreter socket', 'interpreter.port', lambda: InterpreterPort(
+            cfg.interpreter_host, cfg.interpreter_port, self.host.scripts, self._lock, cfg.software_version)) \
+            if has_interpreter_socket(cfg.software_version) else None
         self.loop = SimLoop(self.step_once, self.sim, self.cfg, self.clock, self.pace, self._lock, self.context,
                             self.get_logger())
         if start:
@@ -377,7 +382,8 @@ class UrSimNode(Node):
     def shutdown(self) -> None:
         """Stop the simulation loop and the controller's interface process, and wait for both."""
         self.loop.stop()
-        close_all([port for port in (self.dashboard_port, self.rtde_port, *self.primary_ports) if port is not None])
+        close_all([port for port in (self.dashboard_port, self.rtde_port, *self.primary_ports, self.interpreter_port)
+                   if port is not None])
         self.gateway.close()
 
     def destroy_node(self) -> None:

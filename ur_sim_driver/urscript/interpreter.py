@@ -37,6 +37,7 @@ class ScriptRobot(Protocol):
     def registers(self): ...  # robot.registers.Registers
     def textmsg(self, text: str) -> None: ...
     def sockets(self): ...  # ports.script_sockets.ScriptSockets: the program's client connections
+    def interpreter_session(self): ...  # interpreter_session.InterpreterSession: the interpreter socket's queue
 
 
 class _Return(Exception):
@@ -301,6 +302,8 @@ class Interpreter:
                     positional.append((yield from self._eval(arg, scope)))
         if name in self.functions:
             return (yield from self._user_call(self.functions[name], positional, keywords))
+        if name == 'interpreter_mode':
+            return (yield from self._interpreter_mode(positional, keywords, scope))
         if name not in self.builtins:
             raise ScriptError(f'unknown function {name!r}: it is not defined in the program and not among the '
                               'functions ur_sim supports (docs/urscript.md)')
@@ -312,6 +315,27 @@ class Interpreter:
                 raise ScriptError(f'{name}: a secondary program (sec) cannot spend robot time; use a def program')
             return (yield result)
         return result
+
+    def _interpreter_mode(self, positional: list, keywords: dict, scope: dict):
+        """interpreter_mode(clearQueueOnEnter=True, clearOnEnd=True): execute the statements the interpreter socket
+        takes, in order and in this scope, until end_interpreter(); sync while none waits."""
+        clear_queue, clear_on_end = _bind('interpreter_mode', [('clearQueueOnEnter', True), ('clearOnEnd', True)],
+                                          positional, keywords)
+        thread = self.threads.current
+        if self.secondary or thread.number != 0:
+            raise ScriptError('interpreter_mode() can only be called in the main thread of a def program')
+        session = self.robot.interpreter_session()
+        session.enter(truth(clear_queue))
+        try:
+            while not session.ended:
+                item = session.next()
+                if item is None:
+                    yield Request('sync')
+                else:
+                    yield from self._block(item[1], scope)
+        finally:
+            session.leave(truth(clear_on_end))
+        return None
 
     def _run_thread(self, name: str) -> ThreadHandle:
         definition = self.thread_definitions.get(name)

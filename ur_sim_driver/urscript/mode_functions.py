@@ -1,6 +1,8 @@
 """URScript's functions that change how the robot behaves rather than where it goes: freedrive and teach mode (the
 robot holds the arm up against gravity and lets it be pushed, as ``/freedrive_mode_controller`` does), the
-force-torque sensor's zero, the gravity the controller believes in, and a protective stop called by the program.
+force-torque sensor's zero, the gravity the controller believes in, a protective stop called by the program, and
+the end and clearing of interpreter mode (``interpreter_session.py``; ``interpreter_mode()`` itself is the
+interpreter's, as it runs statements).
 What they do goes through the program's robot (``program.py``)."""
 from __future__ import annotations
 
@@ -33,7 +35,15 @@ def mode_functions(robot) -> dict[str, tuple[list, Callable]]:
             raise ScriptError(f'set_gravity: d is a list of 3 numbers [m/s^2]; got {show(d)}')
         robot.set_gravity([float(v) for v in d])
 
+    def clear_interpreter():
+        session = robot.interpreter_session()
+        if not session.active:
+            raise ScriptError('clear_interpreter() can only be called in interpreter mode')
+        session.clear()
+
     return {
+        'end_interpreter': ([], lambda: robot.interpreter_session().end()),
+        'clear_interpreter': ([], clear_interpreter),
         'freedrive_mode': ([('freeAxes', None), ('feature', None)], freedrive_mode),
         'end_freedrive_mode': ([], lambda: robot.set_free(False)),
         'teach_mode': ([], lambda: robot.set_free(True)),

@@ -24,11 +24,13 @@ from ur_sim_driver.robot.robot_state import RobotState
 from ur_sim_driver.robot.simulator import Simulator
 from ur_sim_driver.urscript.grammar import parse
 from ur_sim_driver.urscript.interpreter import Interpreter
+from ur_sim_driver.urscript.interpreter_session import InterpreterSession
 from ur_sim_driver.urscript.moves import Arc, JointLine, Move, Servo, Speed, ToolLine, ToolSpeed, tool_jacobian
 from ur_sim_driver.urscript.values import Pose, Request, is_number, show
 
 END_DECELERATION = 2.0  # [rad/s^2] a program that ends while the arm moves at speed stops it with this
 STEADY_SPEED = 1e-3  # [rad/s] is_steady(): every joint slower than this, and no motion commanded
+ABORT_DECELERATION = 4.0  # [rad/s^2] the interpreter socket's abort stops a movej or movel with this
 HISTORY = 1250  # control cycles of actual joint positions kept for get_actual_joint_positions_history
 _DH_FROM_BASE_LINK = np.diag([-1.0, -1.0, 1.0, 1.0])  # the controller's base frame is DH frame 0
 
@@ -44,16 +46,20 @@ class ScriptProgram:
         name: the program's name when it defines none (bare statements).
         sockets: its client connections (``ports.script_sockets.ScriptSockets``), closed when it ends; None: a
             program without network (a socket function is then a runtime error).
+        session: the robot's interpreter socket queue (interpreter mode); None: one of its own, which no socket
+            feeds.
     """
 
     def __init__(self, source: str, sim: Simulator, robot: RobotState, factor: Callable[[], float],
-                 log: Callable[[str], None], name: str = 'unnamed', sockets=None) -> None:
+                 log: Callable[[str], None], name: str = 'unnamed', sockets=None,
+                 session: InterpreterSession | None = None) -> None:
         self.source = source
         self.interpreter = Interpreter(parse(source), self)
         self.name = self.interpreter.name or name
         self.secondary = self.interpreter.secondary
         self.sim, self.robot, self._factor, self._log = sim, robot, factor, log
         self._sockets = sockets
+        self._session = session if session is not None else InterpreterSession()
         self._flange_ik = UrAnalyticIK(sim.params.dh, base_pose=_DH_FROM_BASE_LINK)  # tool0
         self.ik = self._tcp_ik()  # the robot's TCP (set_tcp): what poses, moves and kinematics refer to
         self.error: ScriptError | None = None
@@ -91,6 +97,11 @@ class ScriptProgram:
         self.threads.new_cycle(period)
         if self._sockets is not None:
             self._sockets.flush()
+        if self._session.take_abort() and isinstance(self._move, (JointLine, ToolLine)):
+            # the interpreter socket's abort: a controlled stop of the movej or movel running now
+            self._move = Speed(self._ref.positions, self._nominal_qd(), np.zeros(len(self._ref.positions)),
+                               ABORT_DECELERATION, None)
+            self._move_t = 0.0
         self._run()
         if self._move is None:
             return self._ref, self._ref.positions
@@ -406,10 +417,15 @@ class ScriptProgram:
             raise ScriptError('this program has no network: sockets are not available here')
         return self._sockets
 
+    def interpreter_session(self) -> InterpreterSession:
+        return self._session
+
     def close(self) -> None:
-        """The program has ended: its sockets close."""
+        """The program has ended: its sockets close, and interpreter mode with it."""
         if self._sockets is not None:
             self._sockets.close_all()
+        if self._session.active:
+            self._session.leave(True)
 
     def textmsg(self, text: str) -> None:
         self._log(text)

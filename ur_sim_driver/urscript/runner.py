@@ -16,6 +16,7 @@ from dataclasses import dataclass
 from ur_sim_driver.errors import ScriptError
 from ur_sim_driver.robot.robot_state import PLAYING, RobotState
 from ur_sim_driver.robot.simulator import Simulator
+from ur_sim_driver.urscript.interpreter_session import InterpreterSession
 from ur_sim_driver.urscript.program import ScriptProgram
 
 STARTED, STOPPED, RUNTIME_ERROR, TEXT = 'started', 'stopped', 'runtime_error', 'text'
@@ -42,6 +43,7 @@ class ScriptRunner:
                  log: Callable[[str], None], sockets: Callable[[], object] | None = None) -> None:
         self.sim, self.robot, self._factor, self._log = sim, robot, factor, log
         self._sockets = sockets
+        self.interpreter = InterpreterSession()  # the interpreter socket's queue (interpreter mode), one per robot
         self.current: ScriptProgram | None = None
         self._listeners: list[Callable[[ScriptEvent], None]] = []
 
@@ -54,7 +56,7 @@ class ScriptRunner:
         """Parse `source` into a program of this robot, ready to start; ScriptError when it does not compile. Needs
         no lock: parsing a long program must not hold up the control loop."""
         return ScriptProgram(source, self.sim, self.robot, self._factor, self._text, name,
-                             self._sockets() if self._sockets is not None else None)
+                             self._sockets() if self._sockets is not None else None, self.interpreter)
 
     def submit(self, source: str, name: str = 'unnamed') -> ScriptProgram:
         """compile() and start() in one (under the lock)."""
