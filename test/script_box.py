@@ -12,6 +12,15 @@ from ur_sim_driver.robot.simulator import Simulator
 from ur_sim_driver.urscript.runner import RUNTIME_ERROR, ScriptRunner
 
 READY = [0.0, -1.2, 1.2, -1.57, -1.57, 0.0]  # [rad] an elbow-bent pose, away from singularities
+# URScript lines for a program's body: a global `ticks` and a thread `counter` that adds one to it every cycle
+COUNTER = '''  global ticks = 0
+  thread counter():
+    while True:
+      ticks = ticks + 1
+      sync()
+    end
+  end
+'''
 
 
 class Box:

@@ -9,8 +9,8 @@ import pytest
 from sim_harness import running_sim, wait_answer, wait_still
 from ur_dashboard_msgs.srv import GetOperationalMode, RawRequest
 
-from ur_sim_driver.ports.dashboard_port import MAX_LINE, WELCOME, DashboardPort
-from ur_sim_driver.ports.tcp_port import PortError
+from ur_sim_driver.ports.dashboard_port import WELCOME, DashboardPort
+from ur_sim_driver.ports.tcp_port import MAX_LINE, PortError
 from ur_sim_driver.robot.dashboard_server import DashboardServer
 from ur_sim_driver.robot.robot_state import RobotState
 

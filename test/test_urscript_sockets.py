@@ -11,7 +11,7 @@ import socket
 import struct
 
 import pytest
-from script_box import Box
+from script_box import COUNTER, Box
 
 from ur_sim_driver.ports.script_sockets import ScriptSockets
 
@@ -75,15 +75,7 @@ def server():
 
 def test_a_program_talks_to_a_loopback_server_in_every_form(server):
     box = Box(before_step=server.poll)
-    box.run(f'''def prog():
-  global ticks = 0
-  thread counter():
-    while True:
-      ticks = ticks + 1
-      sync()
-    end
-  end
-  textmsg("open ", socket_open("127.0.0.1", {server.port}, "a"))
+    box.run('def prog():\n' + COUNTER + f'''  textmsg("open ", socket_open("127.0.0.1", {server.port}, "a"))
   run counter()
   socket_send_line("hello", "a")
   before = ticks

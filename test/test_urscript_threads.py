@@ -4,7 +4,7 @@ wins), the infinite-loop error in a thread, halt, and the program ending with it
 from __future__ import annotations
 
 import numpy as np
-from script_box import READY, Box
+from script_box import COUNTER, READY, Box
 
 from ur_sim_driver.robot.robot_state import STOPPED
 from ur_sim_driver.urscript.runner import STARTED
@@ -13,15 +13,7 @@ from ur_sim_driver.urscript.runner import STOPPED as EV_STOPPED
 
 def test_threads_run_every_cycle_beside_the_main_program():
     box = Box()
-    took = box.run('''def prog():
-  global ticks = 0
-  thread counter():
-    while True:
-      ticks = ticks + 1
-      sync()
-    end
-  end
-  t = run counter()
+    took = box.run('def prog():\n' + COUNTER + '''  t = run counter()
   sleep(0.1)
   kill t
   textmsg("ticks ", ticks)
@@ -55,15 +47,7 @@ end''')
 
 def test_a_critical_section_keeps_the_other_threads_out_even_while_it_spends_time():
     box = Box()
-    box.run('''def prog():
-  global ticks = 0
-  thread counter():
-    while True:
-      ticks = ticks + 1
-      sync()
-    end
-  end
-  t = run counter()
+    box.run('def prog():\n' + COUNTER + '''  t = run counter()
   sleep(0.01)
   enter_critical
   before = ticks

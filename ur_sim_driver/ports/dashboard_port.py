@@ -7,8 +7,8 @@ order. The answers come from :class:`~ur_sim_driver.robot.dashboard_server.Dashb
 ROS ``/dashboard_client`` services use, so a popup opened over TCP, a program loaded through ROS or a user role set
 either way is one robot's state. Each command is handled under the simulation lock, as the services handle theirs.
 
-Lines end with ``\\n`` (a ``\\r`` before it is dropped); a line longer than ``MAX_LINE`` bytes closes the connection,
-so that a client that never sends a newline cannot hold memory.
+Lines end with ``\\n`` (a ``\\r`` before it is dropped); a line longer than ``tcp_port.MAX_LINE`` bytes closes the
+connection, so that a client that never sends a newline cannot hold memory (``tcp_port.serve_lines``).
 
 A PolyScope X robot (software 10.x) has no dashboard server: its Robot API (HTTP) replaces it, and nothing listens
 on port 29999 (URSim's start script does not even forward the port for PolyScope X). :class:`DashboardPort` then
@@ -16,19 +16,17 @@ refuses to open, with :class:`PortError` saying so.
 """
 from __future__ import annotations
 
-import socket
 import threading
 from collections.abc import Callable
 
-from ur_sim_driver.ports.tcp_port import PortError, TcpPort
+from ur_sim_driver.ports.tcp_port import LinePort, PortError
 from ur_sim_driver.robot.dashboard_server import DashboardServer
 
 WELCOME = 'Connected: Universal Robots Dashboard Server'
 CLOSING = ('quit', 'shutdown')  # commands after whose answer the server closes the connection
-MAX_LINE = 64 * 1024  # [bytes]
 
 
-class DashboardPort:
+class DashboardPort(LinePort):
     """The dashboard server listening on `host`:`port` (0: a free port chosen by the system).
 
     Args:
@@ -46,31 +44,11 @@ class DashboardPort:
             raise PortError(f'dashboard server: not on {host}:{port}, PolyScope X {server.version.dotted()} has none '
                             '(its Robot API replaces it)')
         self._server, self._lock, self._log = server, lock, log
-        self._port = TcpPort('dashboard server', host, port, self._serve)
+        super().__init__('dashboard server', host, port, WELCOME)
 
-    @property
-    def address(self) -> tuple[str, int]:
-        """(host, port) listened on."""
-        return self._port.address
-
-    def close(self) -> None:
-        self._port.close()
-
-    def _serve(self, connection: socket.socket) -> None:
-        with connection.makefile('rb') as rfile:
-            self._lines(connection, rfile)
-
-    def _lines(self, connection: socket.socket, rfile) -> None:
-        connection.sendall((WELCOME + '\n').encode())
-        while True:
-            raw = rfile.readline(MAX_LINE + 1)
-            if not raw or (len(raw) > MAX_LINE and not raw.endswith(b'\n')):
-                return  # the client closed the connection, or sent an endless line
-            line = raw.decode('utf-8', errors='replace').rstrip('\n').rstrip('\r')
-            with self._lock:
-                reply = self._server.handle(line)
-            if reply.refusal:
-                self._log(f"dashboard port '{line}': {reply.answer} ({reply.refusal})")
-            connection.sendall((reply.answer + '\n').encode())
-            if ' '.join(line.lower().split()) in CLOSING:
-                return
+    def answer(self, line: str) -> tuple[str, bool]:
+        with self._lock:
+            reply = self._server.handle(line)
+        if reply.refusal:
+            self._log(f"dashboard port '{line}': {reply.answer} ({reply.refusal})")
+        return reply.answer, ' '.join(line.lower().split()) in CLOSING

@@ -8,14 +8,12 @@ open, with :class:`PortError` saying so.
 """
 from __future__ import annotations
 
-import socket
 import threading
 
-from ur_sim_driver.ports.tcp_port import PortError, TcpPort
+from ur_sim_driver.ports.tcp_port import LinePort, PortError
 from ur_sim_driver.robot.software import SoftwareVersion
 from ur_sim_driver.urscript.runner import ScriptRunner
 
-MAX_LINE = 64 * 1024  # [bytes] a longer line closes the connection
 FIRST = (5, 10)  # the first PolyScope with interpreter mode
 
 
@@ -23,7 +21,7 @@ def has_interpreter_socket(version: SoftwareVersion) -> bool:
     return version.e_series and not version.polyscope_x and (version.major, version.minor) >= FIRST
 
 
-class InterpreterPort:
+class InterpreterPort(LinePort):
     """The interpreter socket on `host`:`port` (0: a free port chosen by the system), in front of `runner`'s
     interpreter session. Raises PortError when the address cannot be listened on or the software has no such
     socket."""
@@ -34,23 +32,8 @@ class InterpreterPort:
             raise PortError(f'interpreter socket: not on {host}:{port}, software {version.dotted()} has none '
                             '(PolyScope 5.10 or later on an e-Series robot)')
         self._runner, self._lock = runner, lock
-        self._port = TcpPort('interpreter socket', host, port, self._serve)
+        super().__init__('interpreter socket', host, port)
 
-    @property
-    def address(self) -> tuple[str, int]:
-        """(host, port) listened on."""
-        return self._port.address
-
-    def close(self) -> None:
-        self._port.close()
-
-    def _serve(self, connection: socket.socket) -> None:
-        with connection.makefile('rb') as rfile:
-            while True:
-                raw = rfile.readline(MAX_LINE + 1)
-                if not raw or (len(raw) > MAX_LINE and not raw.endswith(b'\n')):
-                    return  # the client closed the connection, or sent an endless line
-                line = raw.decode('utf-8', errors='replace').rstrip('\n').rstrip('\r')
-                with self._lock:
-                    reply = self._runner.interpreter.handle(line, self._runner.current is not None)
-                connection.sendall((reply + '\n').encode())
+    def answer(self, line: str) -> tuple[str, bool]:
+        with self._lock:
+            return self._runner.interpreter.handle(line, self._runner.current is not None), False

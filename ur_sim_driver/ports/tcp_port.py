@@ -57,6 +57,45 @@ class TcpPort:
         self._thread.join(timeout=5.0)
 
 
+MAX_LINE = 64 * 1024  # [bytes] a longer line closes a line server's connection
+
+
+def serve_lines(connection: socket.socket, answer: Callable[[str], tuple[str, bool]], greeting: str = '') -> None:
+    """A line protocol: the greeting (if any), then one answer line per line received (`answer(line)`: the answer,
+    and whether to close after it). Lines end with ``\\n`` (a ``\\r`` before it is dropped); a line longer than
+    MAX_LINE bytes closes the connection, so that a client that never sends a newline cannot hold memory."""
+    with connection.makefile('rb') as rfile:
+        if greeting:
+            connection.sendall((greeting + '\n').encode())
+        while True:
+            raw = rfile.readline(MAX_LINE + 1)
+            if not raw or (len(raw) > MAX_LINE and not raw.endswith(b'\n')):
+                return  # the client closed the connection, or sent an endless line
+            reply, close = answer(raw.decode('utf-8', errors='replace').rstrip('\n').rstrip('\r'))
+            connection.sendall((reply + '\n').encode())
+            if close:
+                return
+
+
+class LinePort:
+    """A line protocol on a TcpPort (:func:`serve_lines`): a subclass answers each line (:meth:`answer`)."""
+
+    def __init__(self, what: str, host: str, port: int, greeting: str = '') -> None:
+        self._port = TcpPort(what, host, port, lambda connection: serve_lines(connection, self.answer, greeting))
+
+    @property
+    def address(self) -> tuple[str, int]:
+        """(host, port) listened on."""
+        return self._port.address
+
+    def close(self) -> None:
+        self._port.close()
+
+    def answer(self, line: str) -> tuple[str, bool]:
+        """The answer to `line`, and whether to close the connection after it."""
+        raise NotImplementedError
+
+
 def close_all(ports: list) -> None:
     """Close `ports` (the robot's ports, each built on a TcpPort) side by side: each waits up to its poll interval
     (0.1 s) for its listening thread to notice."""
