@@ -34,8 +34,10 @@ class Box:
         self.log: list[str] = []
         self.network_log: list[str] = []
         self.before_step = before_step
+        self.force_modes: list = []  # what programs asked of the robot's force mode (no force mode runs here)
         self.runner = ScriptRunner(self.sim, self.robot, lambda: self.factor, self.log.append,
-                                   lambda: ScriptSockets(lambda: self.sim.time, self.network_log.append))
+                                   lambda: ScriptSockets(lambda: self.sim.time, self.network_log.append),
+                                   self.force_modes.append)
         self.events = []
         self.runner.listen(self.events.append)
         self.q: list[np.ndarray] = []

@@ -243,3 +243,28 @@ def test_a_deviation_beyond_the_limit_is_a_protective_stop(rig, pusher, case):
     finally:
         push(h, pusher, log, (0.0,) * 6)
         stop_listening()
+
+
+def test_a_urscript_program_runs_the_same_force_mode(rig):
+    """force_mode from a program (as ur_rtde's forceMode sends it): the robot's one force mode, whatever the
+    controller's state; 10 N up along the base's z axis in free space moves the TCP up, and only up; the program's
+    end_force_mode, then its end, leave the arm held."""
+    h, _, _, _ = rig
+    _move(h, AWAY)
+    p0, _ = tcp(h)
+    with h.sim.host.lock:
+        h.sim.host.scripts.submit('''def press():
+  force_mode_set_damping(0.1)
+  force_mode_set_gain_scaling(0.8)
+  force_mode(p[0, 0, 0, 0, 0, 0], [0, 0, 1, 0, 0, 0], [0, 0, 10, 0, 0, 0], 2, [1, 1, 1, 1, 1, 1])
+  sleep(5.0)
+  end_force_mode()
+  sleep(0.5)
+end''')
+    wait_for(lambda: h.sim.host.scripts.current is None, timeout=60.0, what='the program to end')
+    p1, _ = tcp(h)
+    moved = p1 - p0
+    assert moved[2] > 0.03 and abs(moved[0]) < 1e-3 and abs(moved[1]) < 1e-3, moved
+    assert h.sim.robot.safety_mode == 1 and h.sim._force_mode.spec is None
+    h.wait_sim_time(0.5)
+    assert np.linalg.norm(tcp(h)[0] - p1) < 2e-3  # held

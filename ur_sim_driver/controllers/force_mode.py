@@ -166,6 +166,16 @@ class ForceModeController(Component):
         return response
 
     # ---- simulation loop, under the lock ----------------------------------------------------------------------
+    def from_program(self, spec: ForceModeSpec | None) -> None:
+        """A URScript program's force_mode (`spec`) or end_force_mode (None): the robot's one force mode, whatever
+        the controller's state (the program, not the driver, commands the robot then)."""
+        if spec is None:
+            self._end()
+            return
+        if self.spec is None:
+            self._velocity = np.zeros(6)
+        self.spec = spec
+
     def _end(self) -> None:
         if self.spec is not None and self._offset is not None:
             self._hold = self._offset  # taken by the loop: the reference plus the offset, held

@@ -142,7 +142,8 @@ class UrSimNode(Node):
         scripts = ScriptRunner(self.sim, self.robot, lambda: self.scaling.factor,
                                lambda text: logger.info(f'textmsg: {text}'),
                                lambda: ScriptSockets(lambda: self.sim.time, logger.warning,
-                                                     self.cfg.allow_remote_sockets))
+                                                     self.cfg.allow_remote_sockets),
+                               lambda spec: self._force_mode.from_program(spec))
         self.host = Host(self.cfg, self.sim, self._lock, self.robot, self.scaling, self.context, files,
                          DashboardServer(self.robot, self.cfg.simulated_ur_type, self.cfg.software_version, files),
                          scripts, self.clock)

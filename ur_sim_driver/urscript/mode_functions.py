@@ -1,15 +1,26 @@
 """URScript's functions that change how the robot behaves rather than where it goes: freedrive and teach mode (the
 robot holds the arm up against gravity and lets it be pushed, as ``/freedrive_mode_controller`` does), the
-force-torque sensor's zero, the gravity the controller believes in, a protective stop called by the program, and
-the end and clearing of interpreter mode (``interpreter_session.py``; ``interpreter_mode()`` itself is the
+force-torque sensor's zero, the gravity the controller believes in, a protective stop called by the program, force
+mode (the robot's one force mode, ``motion/force_mode.py``, the same as ``/force_mode_controller``'s), and the end
+and clearing of interpreter mode (``interpreter_session.py``; ``interpreter_mode()`` itself is the
 interpreter's, as it runs statements).
 What they do goes through the program's robot (``program.py``)."""
 from __future__ import annotations
 
 from collections.abc import Callable
 
+import numpy as np
+
 from ur_sim_driver.errors import ScriptError
+from ur_sim_driver.motion.force_mode import ForceModeSpec
 from ur_sim_driver.urscript.values import REQUIRED, Pose, is_number, show
+
+
+def _six(name: str, value) -> list[float]:
+    items = value.values if isinstance(value, Pose) else value
+    if not isinstance(items, (list, tuple)) or len(items) != 6 or not all(is_number(v) for v in items):
+        raise ScriptError(f'{name} is a list of 6 numbers; got {show(value)}')
+    return [float(v) for v in items]
 
 
 def _axes(value) -> list[int]:
@@ -35,6 +46,18 @@ def mode_functions(robot) -> dict[str, tuple[list, Callable]]:
             raise ScriptError(f'set_gravity: d is a list of 3 numbers [m/s^2]; got {show(d)}')
         robot.set_gravity([float(v) for v in d])
 
+    def force_mode(task_frame, selection_vector, wrench, type, limits):  # noqa: A002 (the manual's name)
+        if not isinstance(task_frame, Pose):
+            raise ScriptError(f'force_mode: task_frame is a pose; got {show(task_frame)}')
+        selection = _six('force_mode: selection_vector', selection_vector)
+        if not all(v in (0, 1) for v in selection):
+            raise ScriptError(f'force_mode: selection_vector is six 0 or 1; got {show(selection_vector)}')
+        if type not in (1, 2, 3):
+            raise ScriptError(f'force_mode: type is 1, 2 or 3; got {show(type)}')
+        bounds = np.abs(_six('force_mode: limits', limits))
+        robot.set_force_mode(ForceModeSpec(task_frame.matrix(), np.array(selection, bool),
+                                           np.array(_six('force_mode: wrench', wrench)), int(type), bounds, 0.0, 0.0))
+
     def clear_interpreter():
         session = robot.interpreter_session()
         if not session.active:
@@ -42,6 +65,9 @@ def mode_functions(robot) -> dict[str, tuple[list, Callable]]:
         session.clear()
 
     return {
+        'force_mode': ([('task_frame', REQUIRED), ('selection_vector', REQUIRED), ('wrench', REQUIRED),
+                        ('type', REQUIRED), ('limits', REQUIRED)], force_mode),
+        'end_force_mode': ([], lambda: robot.set_force_mode(None)),
         'end_interpreter': ([], lambda: robot.interpreter_session().end()),
         'clear_interpreter': ([], clear_interpreter),
         'freedrive_mode': ([('freeAxes', None), ('feature', None)], freedrive_mode),

@@ -12,11 +12,13 @@ from __future__ import annotations
 
 from collections import deque
 from collections.abc import Callable
+from dataclasses import replace
 
 import numpy as np
 
 from ur_sim_driver.description.analytic_ik import UrAnalyticIK, nearest_branch
 from ur_sim_driver.errors import ConfigError, ScriptError
+from ur_sim_driver.motion.force_mode import ForceModeSpec
 from ur_sim_driver.motion.trajectory import TrajectorySample
 from ur_sim_driver.physics.physics import ArmState
 from ur_sim_driver.physics.tool_contact import strongest_touch
@@ -48,11 +50,14 @@ class ScriptProgram:
             program without network (a socket function is then a runtime error).
         session: the robot's interpreter socket queue (interpreter mode); None: one of its own, which no socket
             feeds.
+        force_mode: starts (a ForceModeSpec) or ends (None) the robot's force mode; None: force_mode is a runtime
+            error.
     """
 
     def __init__(self, source: str, sim: Simulator, robot: RobotState, factor: Callable[[], float],
                  log: Callable[[str], None], name: str = 'unnamed', sockets=None,
-                 session: InterpreterSession | None = None) -> None:
+                 session: InterpreterSession | None = None,
+                 force_mode: Callable[[ForceModeSpec | None], None] | None = None) -> None:
         self.source = source
         self.interpreter = Interpreter(parse(source), self)
         self.name = self.interpreter.name or name
@@ -60,6 +65,8 @@ class ScriptProgram:
         self.sim, self.robot, self._factor, self._log = sim, robot, factor, log
         self._sockets = sockets
         self._session = session if session is not None else InterpreterSession()
+        self._force_mode = force_mode
+        self.in_force_mode = False
         self._flange_ik = UrAnalyticIK(sim.params.dh, base_pose=_DH_FROM_BASE_LINK)  # tool0
         self.ik = self._tcp_ik()  # the robot's TCP (set_tcp): what poses, moves and kinematics refer to
         self.error: ScriptError | None = None
@@ -420,12 +427,27 @@ class ScriptProgram:
     def interpreter_session(self) -> InterpreterSession:
         return self._session
 
+    def set_force_mode(self, spec: ForceModeSpec | None) -> None:
+        """force_mode (`spec`: the task frame in base, the gain and damping force_mode_set_* gave) or end_force_mode
+        (None)."""
+        if self._force_mode is None:
+            raise ScriptError('force mode needs the simulation loop: this robot has none')
+        if spec is not None:
+            spec = replace(spec, damping=self.force_settings['damping'],
+                           gain_scaling=self.force_settings['gain_scaling'])
+        elif not self.in_force_mode:
+            return
+        self._force_mode(spec)
+        self.in_force_mode = spec is not None
+
     def close(self) -> None:
         """The program has ended: its sockets close, and interpreter mode with it."""
         if self._sockets is not None:
             self._sockets.close_all()
         if self._session.active:
             self._session.leave(True)
+        if self.in_force_mode:  # the robot ends force mode with the program
+            self.set_force_mode(None)
 
     def textmsg(self, text: str) -> None:
         self._log(text)

@@ -14,6 +14,7 @@ from collections.abc import Callable
 from dataclasses import dataclass
 
 from ur_sim_driver.errors import ScriptError
+from ur_sim_driver.motion.force_mode import ForceModeSpec
 from ur_sim_driver.robot.robot_state import PLAYING, RobotState
 from ur_sim_driver.robot.simulator import Simulator
 from ur_sim_driver.urscript.interpreter_session import InterpreterSession
@@ -37,12 +38,15 @@ class ScriptEvent:
 class ScriptRunner:
     """Args: sim, robot: the simulated robot; factor: its speed scaling factor now; log: the robot's log;
     sockets: makes a program's client sockets (``ports.script_sockets.ScriptSockets`` on robot time), None: programs
-    have no network."""
+    have no network; force_mode: starts (a ForceModeSpec) or ends (None) the robot's force mode, None: programs
+    cannot use it."""
 
     def __init__(self, sim: Simulator, robot: RobotState, factor: Callable[[], float],
-                 log: Callable[[str], None], sockets: Callable[[], object] | None = None) -> None:
+                 log: Callable[[str], None], sockets: Callable[[], object] | None = None,
+                 force_mode: Callable[[ForceModeSpec | None], None] | None = None) -> None:
         self.sim, self.robot, self._factor, self._log = sim, robot, factor, log
         self._sockets = sockets
+        self._force_mode = force_mode
         self.interpreter = InterpreterSession()  # the interpreter socket's queue (interpreter mode), one per robot
         self.current: ScriptProgram | None = None
         self._listeners: list[Callable[[ScriptEvent], None]] = []
@@ -56,7 +60,8 @@ class ScriptRunner:
         """Parse `source` into a program of this robot, ready to start; ScriptError when it does not compile. Needs
         no lock: parsing a long program must not hold up the control loop."""
         return ScriptProgram(source, self.sim, self.robot, self._factor, self._text, name,
-                             self._sockets() if self._sockets is not None else None, self.interpreter)
+                             self._sockets() if self._sockets is not None else None, self.interpreter,
+                             self._force_mode)
 
     def submit(self, source: str, name: str = 'unnamed') -> ScriptProgram:
         """compile() and start() in one (under the lock)."""
