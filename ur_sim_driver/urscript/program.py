@@ -32,6 +32,9 @@ from ur_sim_driver.urscript.values import Pose, Request, is_number, show
 
 END_DECELERATION = 2.0  # [rad/s^2] a program that ends while the arm moves at speed stops it with this
 STEADY_SPEED = 1e-3  # [rad/s] is_steady(): every joint slower than this, and no motion commanded
+# get_freedrive_status: the Jacobian's smallest singular value below these is near / too near a singularity (UR does
+# not publish its rule; these make a wrist within a few degrees of straight "near")
+NEAR_SINGULAR, TOO_NEAR_SINGULAR = 0.05, 0.01
 ABORT_DECELERATION = 4.0  # [rad/s^2] the interpreter socket's abort stops a movej or movel with this
 HISTORY = 1250  # control cycles of actual joint positions kept for get_actual_joint_positions_history
 _DH_FROM_BASE_LINK = np.diag([-1.0, -1.0, 1.0, 1.0])  # the controller's base frame is DH frame 0
@@ -81,6 +84,7 @@ class ScriptProgram:
         self._touch_from: int | None = None  # the cycle a tool contact began (tool_contact)
         self.force_settings = {'gain_scaling': 1.0, 'damping': 0.005}  # force_mode_set_gain_scaling, _damping
         self.free = False  # freedrive (teach mode): the robot holds the arm up and lets it be moved
+        self._waypoint: np.ndarray | None = None  # the joints at the end of the current move (None: no end)
         self._qd_nominal: np.ndarray | None = None  # the current move's velocity this cycle [rad/s]
 
     # ---- the commander ------------------------------------------------------------------------------------
@@ -165,6 +169,7 @@ class ScriptProgram:
         self._move = move
         self._move_t = 0.0
         self._qd_nominal = move.sample(0.0)[1]  # a move built next in this same cycle starts from it
+        self._waypoint = move.sample(move.duration)[0] if np.isfinite(move.duration) else None
         # It returns when the motion function would, and never before the next cycle: a motion takes at least a
         # control cycle, so a thread that calls one in a loop spends robot time (ur_rtde's speed_thread does).
         cycle = self._cycle
@@ -345,6 +350,26 @@ class ScriptProgram:
         if self._touch_from is None:
             self._touch_from = self._cycle
         return self._cycle - self._touch_from + 1
+
+    def target_waypoint(self) -> Pose:
+        """The TCP pose the current move ends at; the target TCP pose now when no move with an end runs."""
+        if self._move is not None and self._waypoint is not None and not self.move_finished():
+            return self.forward_kin(self._waypoint, None)
+        return self.forward_kin(self.target_q(), None)
+
+    def joint_torques(self) -> np.ndarray:
+        """(n,) [N m] the joints' torques less what the robot's model needs to move the arm as it moves now (M(q)
+        qdd of the target, Coriolis, and gravity with the payload and gravity it believes in: set_payload,
+        set_gravity): what the environment, and a payload other than the one set, load it with."""
+        mass, _ = self.sim.physics.dynamics()
+        model = mass @ self.target_qdd() + self.sim.physics.coriolis_torques() + self.sim.gravity_compensation()
+        return self.sim.state().effort - model
+
+    def freedrive_status(self) -> int:
+        """0 normal, 1 near a singularity, 2 too close to one (by the Jacobian's smallest singular value at the
+        actual joints: below NEAR_SINGULAR and TOO_NEAR_SINGULAR)."""
+        smallest = float(np.linalg.svd(tool_jacobian(self.ik, self.sim.state().q), compute_uv=False)[-1])
+        return 2 if smallest < TOO_NEAR_SINGULAR else 1 if smallest < NEAR_SINGULAR else 0
 
     def target_qdd(self) -> np.ndarray:
         return self._ref.accelerations if self._ref is not None else np.zeros(len(self.sim.state().q))

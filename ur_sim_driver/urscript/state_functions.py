@@ -121,6 +121,9 @@ def state_functions(robot) -> dict[str, tuple[list, Callable]]:
         'get_tcp_offset': ([], lambda: robot.tcp_offset()),
         'set_tcp': ([('pose', R)], lambda pose: robot.set_tcp(_pose('set_tcp: pose', pose))),
         'is_steady': ([], lambda: robot.steady()),
+        'get_target_waypoint': ([], lambda: robot.target_waypoint()),
+        'get_joint_torques': ([], lambda: _list(robot.joint_torques())),
+        'get_freedrive_status': ([], lambda: robot.freedrive_status()),
         'force_mode_set_gain_scaling': ([('scaling', R)], gain_scaling),
         'force_mode_set_damping': ([('damping', R)], damping),
     }
