@@ -225,10 +225,10 @@ def test_stop_script_ends_the_program_and_an_unsupported_command_is_a_runtime_er
     box = Box()
     client = Client(box, script)
     q0 = _q(box).copy()
-    client.send(35, [1.0])  # setWatchdog: rtde_set_watchdog, which ur_sim's URScript lacks
+    client.send(57, [], [1])  # enableExternalFtSensor: enable_external_ft_sensor, which ur_sim's URScript lacks
     client.until(lambda: box.runner.current is None, 0.1, 'the program stopped')
     error = next(e for e in box.events if e.kind == RUNTIME_ERROR)
-    assert "unknown function 'rtde_set_watchdog'" in error.text and error.line > 0
+    assert "unknown function 'enable_external_ft_sensor'" in error.text and error.line > 0
     for _ in range(100):
         box.step()
     assert np.allclose(_q(box), q0, atol=1e-4)  # the arm holds
@@ -246,12 +246,12 @@ def test_a_copy_with_its_banner_and_section_comments_changed_runs_the_same(scrip
     assert np.allclose(_q(box), target, atol=2e-3)
 
 
-# ur_rtde 1.6.5's command numbers (RobotCommand::Type) that ur_sim runs, the three that stop the script with the
-# function it lacks, and directTorque, which its script loops on without sync (docs/ports.md): 66 + 3 + 1 = 70.
+# ur_rtde 1.6.5's command numbers (RobotCommand::Type) that ur_sim runs, the two that stop the script with the
+# function it lacks, and directTorque, which its script loops on without sync (docs/ports.md): 67 + 2 + 1 = 70.
 RUNS = (1, 2, 3, 4, 6, 7, 8, 9, 10, 11, 12, 13, 14, 15, 16, 17, 18, 19, 20, 21, 22, 23, 24, 25, 26, 27, 28, 29, 30,
-        31, 33, 34, 36, 37, 38, 39, 40, 41, 42, 43, 44, 45, 46, 47, 48, 49, 50, 51, 52, 53, 54, 55, 58, 59, 60, 61,
+        31, 33, 34, 35, 36, 37, 38, 39, 40, 41, 42, 43, 44, 45, 46, 47, 48, 49, 50, 51, 52, 53, 54, 55, 58, 59, 60, 61,
         62, 63, 64, 65, 67, 68, 69, 70, 71, 255)
-LACKS = {35: 'rtde_set_watchdog', 56: 'ft_rtde_input_enable', 57: 'enable_external_ft_sensor'}
+LACKS = {56: 'ft_rtde_input_enable', 57: 'enable_external_ft_sensor'}
 DIRECT_TORQUE = 66
 JOINT_ARGUMENTS = (1, 4, 9, 11, 27, 37, 44, 60, 61)  # the first six doubles are joints (else a pose or a speed)
 
@@ -265,6 +265,8 @@ def _arguments(box: Box, cmd: int) -> tuple[list[float], list[int]]:
     ints = [0] * 7
     if cmd in (9, 10):  # speedJ, speedL: a small speed, a 1, no time
         doubles[:8] = [0.01, 0, 0, 0, 0, 0, 1.0, 0.0]
+    elif cmd == 35:  # setWatchdog at 1 Hz: nothing writes the register here, and 0.2 s is within its second
+        doubles[0] = 1.0
     elif cmd in (15, 16, 33, 34):  # the stops: a deceleration
         doubles[0] = 2.0
     elif cmd in (17, 65):  # the payload: 1 kg, 5 cm out along the flange, no inertia of its own

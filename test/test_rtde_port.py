@@ -235,6 +235,9 @@ def test_inputs_change_the_robot_and_show_on_the_ros_side(h):
             if bits & 0b100:
                 break
         assert register == 2.5 and h.sim.rtde_port.cycle > streamed
+        with h.sim.host.lock:  # when each input was last written, in robot time (URScript's rtde_set_watchdog)
+            written, now = dict(h.sim.robot.rtde_inputs), h.sim.sim.time
+        assert set(names) <= set(written) and all(written[n] <= now for n in names)
         payload = struct.pack('>BBBd', recipe, 0b0000_0100, 0, 0.0)  # pin 2 off again
         client.sock.sendall(struct.pack('>HB', 3 + len(payload), ord('U')) + payload)
         wait_still(lambda: not h.sim.sim.io.digital_out[2], what='digital output 2 off')

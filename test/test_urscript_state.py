@@ -8,7 +8,7 @@ import numpy as np
 import pytest
 from script_box import READY, Box
 
-from ur_sim_driver.robot.robot_state import PLAYING, PROTECTIVE_STOP
+from ur_sim_driver.robot.robot_state import PLAYING, PROTECTIVE_STOP, STOPPED
 from ur_sim_driver.urscript.state_functions import pose_sub
 from ur_sim_driver.urscript.values import Pose, pose_add
 
@@ -202,3 +202,32 @@ end''')
     assert box.log[:3] == ['True', 'True', '0']
     assert box.log[3:5] == ['True', 'True']  # mid-move: the waypoint is the move's end, the target TCP is on the way
     assert box.log[5] == '2'  # straight up, wrist and elbow aligned: at a singularity
+
+
+@pytest.mark.parametrize('action', ['pause', 'stop'])
+def test_an_rtde_watchdog_pauses_or_stops_the_program_when_its_input_falls_silent(action):
+    box = Box()
+    writes = []
+
+    def client_writes():  # as the RTDE port records an input package: 100 Hz for 0.2 s, then nothing
+        if len(writes) < 20 and len(box.q) % 5 == 0:
+            box.robot.rtde_inputs['input_int_register_0'] = box.sim.time
+            writes.append(box.sim.time)
+    box.before_step = client_writes
+    took = box.run(f'''def prog():
+  rtde_set_watchdog("input_int_register_0", 50, "{action}")
+  while True:
+    sync()
+  end
+end''')
+    # the last write at 0.19 s; 20 ms later the watchdog acts, and the program ends within the next cycles (a paused
+    # URScript program is not resumed in ur_sim: it ends, as after a dashboard pause)
+    assert writes[-1] + 0.02 < took < writes[-1] + 0.03 and box.robot.program_state == STOPPED
+    assert box.log[-1].startswith('rtde_set_watchdog: input_int_register_0 was not written for')
+    assert box.log[-1].endswith(f'action {action}')
+
+
+def test_an_rtde_watchdog_refuses_an_unknown_action():
+    box = Box()
+    box.run('def prog():\n  rtde_set_watchdog("input_int_register_0", 10, "explode")\nend')
+    assert 'action is one of ignore, pause, stop' in box.errors()[0].text

@@ -198,6 +198,9 @@ def write(host: Host, values: dict[str, object]) -> list[str]:
             host.speed_scaling.slider = f
         else:
             refused.append(f'speed_slider_fraction = {f} is outside [{SLIDER_MIN}, {SLIDER_MAX}]')
+    written = host.robot.rtde_inputs  # for URScript's rtde_set_watchdog
+    for name in values:
+        written[name] = host.sim.time
     registers = host.robot.registers
     for name, value in values.items():
         if name.startswith('input_int_register_'):

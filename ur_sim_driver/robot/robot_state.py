@@ -71,6 +71,7 @@ class RobotState:
         self._pending: list[tuple[float, int]] = []  # (time [s], mode) steps of a transition under way
         self._now = 0.0
         self.registers = Registers()  # the general purpose registers (RTDE, URScript)
+        self.rtde_inputs: dict[str, float] = {}  # [s] of robot time each RTDE input variable was last written
         self.script: str | None = None  # the URScript program playing instead of the loaded one (its name)
 
     # ---- queries ------------------------------------------------------------------------------

@@ -15,6 +15,8 @@ from ur_sim_driver.errors import ScriptError
 from ur_sim_driver.motion.force_mode import ForceModeSpec
 from ur_sim_driver.urscript.values import REQUIRED, Pose, is_number, show
 
+WATCHDOG_ACTIONS = ('ignore', 'pause', 'stop')
+
 
 def _six(name: str, value) -> list[float]:
     items = value.values if isinstance(value, Pose) else value
@@ -58,6 +60,16 @@ def mode_functions(robot) -> dict[str, tuple[list, Callable]]:
         robot.set_force_mode(ForceModeSpec(task_frame.matrix(), np.array(selection, bool),
                                            np.array(_six('force_mode: wrench', wrench)), int(type), bounds, 0.0, 0.0))
 
+    def watchdog(variable_name, min_frequency, action='pause'):
+        if not isinstance(variable_name, str) or not variable_name:
+            raise ScriptError('rtde_set_watchdog: variable_name is the name of an RTDE input; got '
+                              f'{show(variable_name)}')
+        if not is_number(min_frequency) or min_frequency < 0:
+            raise ScriptError(f'rtde_set_watchdog: min_frequency is a number >= 0 [Hz]; got {show(min_frequency)}')
+        if action not in WATCHDOG_ACTIONS:
+            raise ScriptError(f'rtde_set_watchdog: action is one of {", ".join(WATCHDOG_ACTIONS)}; got {show(action)}')
+        robot.set_watchdog(variable_name, float(min_frequency), action)
+
     def clear_interpreter():
         session = robot.interpreter_session()
         if not session.active:
@@ -65,6 +77,8 @@ def mode_functions(robot) -> dict[str, tuple[list, Callable]]:
         session.clear()
 
     return {
+        'rtde_set_watchdog': ([('variable_name', REQUIRED), ('min_frequency', REQUIRED), ('action', 'pause')],
+                              watchdog),
         'force_mode': ([('task_frame', REQUIRED), ('selection_vector', REQUIRED), ('wrench', REQUIRED),
                         ('type', REQUIRED), ('limits', REQUIRED)], force_mode),
         'end_force_mode': ([], lambda: robot.set_force_mode(None)),

@@ -85,6 +85,8 @@ class ScriptProgram:
         self.force_settings = {'gain_scaling': 1.0, 'damping': 0.005}  # force_mode_set_gain_scaling, _damping
         self.free = False  # freedrive (teach mode): the robot holds the arm up and lets it be moved
         self._waypoint: np.ndarray | None = None  # the joints at the end of the current move (None: no end)
+        # rtde_set_watchdog: RTDE input variable -> (the longest gap between its updates [s], action, since [s])
+        self._watchdogs: dict[str, tuple[float, str, float]] = {}
         self._qd_nominal: np.ndarray | None = None  # the current move's velocity this cycle [rad/s]
 
     # ---- the commander ------------------------------------------------------------------------------------
@@ -106,6 +108,8 @@ class ScriptProgram:
             self._move_t += period * factor
             self._sample(factor)
         self.threads.new_cycle(period)
+        if self._watchdogs and self._watchdog_fired():
+            return self._ref, self._ref.positions
         if self._sockets is not None:
             self._sockets.flush()
         if self._session.take_abort() and isinstance(self._move, (JointLine, ToolLine)):
@@ -350,6 +354,36 @@ class ScriptProgram:
         if self._touch_from is None:
             self._touch_from = self._cycle
         return self._cycle - self._touch_from + 1
+
+    def set_watchdog(self, variable: str, min_frequency: float, action: str) -> None:
+        """rtde_set_watchdog: from now on `variable` must be written over RTDE at least `min_frequency` [Hz] times a
+        second, else `action` ('ignore', 'pause', 'stop'); 0 Hz removes the watchdog."""
+        if min_frequency <= 0.0:
+            self._watchdogs.pop(variable, None)
+            return
+        self._watchdogs[variable] = (1.0 / min_frequency, action, self.sim.time)
+
+    def _watchdog_fired(self) -> bool:
+        """A watchdog's variable was not written in time: its action (the program pauses or stops; True) or a log
+        line ('ignore', once a silence)."""
+        now = self.sim.time
+        for variable, (gap, action, since) in list(self._watchdogs.items()):
+            last = max(self.robot.rtde_inputs.get(variable, since), since)
+            if now - last <= gap + 1e-9:
+                continue
+            message = (f'rtde_set_watchdog: {variable} was not written for {now - last:.3f} s (at least every '
+                       f'{gap:.3f} s); action {action}')
+            if action == 'ignore':
+                self._log(message)
+                self._watchdogs[variable] = (gap, action, now)
+                continue
+            self._log(message)
+            if action == 'pause':
+                self.robot.pause()
+            else:
+                self.robot.stop()
+            return True
+        return False
 
     def target_waypoint(self) -> Pose:
         """The TCP pose the current move ends at; the target TCP pose now when no move with an end runs."""
