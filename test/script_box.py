@@ -62,8 +62,11 @@ class Box:
             sample, stop = TrajectorySample(state.q, zero, zero, 0, True), state.q
         else:
             sample, stop = program.command(state, self.sim.control_dt)
-        if program is not None and program.free:  # freedrive: as the simulation loop does
+        torques = program.torques() if program is not None else None
+        if program is not None and program.free:  # freedrive, torque control: as the simulation loop does
             self.sim.advance_free(state)
+        elif torques is not None:
+            self.sim.advance_torque(state, torques)
         else:
             self.sim.advance(state, sample, stop)
         self.runner.after_cycle()

@@ -231,3 +231,29 @@ def test_an_rtde_watchdog_refuses_an_unknown_action():
     box = Box()
     box.run('def prog():\n  rtde_set_watchdog("input_int_register_0", 10, "explode")\nend')
     assert 'action is one of ignore, pause, stop' in box.errors()[0].text
+
+
+def test_direct_torque_on_top_of_gravity_compensation_and_the_servo_back_when_it_stops():
+    box = Box()
+    box.run('''def prog():
+  k = 0
+  while k < 250:
+    direct_torque([0, 0, 0, 0, 0, 0])
+    k = k + 1
+  end
+  textmsg(norm(get_actual_joint_speeds()) < 1e-3)
+  k = 0
+  while k < 100:
+    direct_torque([0, 0, 0, 0, 0, 0.5])
+    k = k + 1
+  end
+  textmsg(get_actual_joint_speeds()[5] > 1)
+  sleep(1.0)
+  textmsg(norm(get_actual_joint_speeds()) < 1e-6)
+end''')
+    assert not box.errors(), box.errors()
+    q = np.array(box.q)
+    assert np.abs(q[249] - READY).max() < 1e-3  # zero torques: the robot holds the arm up (half a second of gravity)
+    assert box.log == ['True', 'True', 'True']
+    # after torque control the servo stops the arm as hard as the robot brakes, and holds it there
+    assert np.abs(q[-1] - q[-100]).max() < 1e-6 and abs(q[-1][5] - q[350][5]) < 0.6

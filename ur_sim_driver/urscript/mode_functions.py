@@ -13,7 +13,7 @@ import numpy as np
 
 from ur_sim_driver.errors import ScriptError
 from ur_sim_driver.motion.force_mode import ForceModeSpec
-from ur_sim_driver.urscript.values import REQUIRED, Pose, is_number, show
+from ur_sim_driver.urscript.values import REQUIRED, Pose, Request, is_number, show
 
 WATCHDOG_ACTIONS = ('ignore', 'pause', 'stop')
 
@@ -60,6 +60,10 @@ def mode_functions(robot) -> dict[str, tuple[list, Callable]]:
         robot.set_force_mode(ForceModeSpec(task_frame.matrix(), np.array(selection, bool),
                                            np.array(_six('force_mode: wrench', wrench)), int(type), bounds, 0.0, 0.0))
 
+    def direct_torque(torque, friction_comp=True):
+        robot.direct_torque(np.array(_six('direct_torque: torque', torque)))
+        return Request('sync')  # it holds the thread until the next control cycle, as the robot's does
+
     def watchdog(variable_name, min_frequency, action='pause'):
         if not isinstance(variable_name, str) or not variable_name:
             raise ScriptError('rtde_set_watchdog: variable_name is the name of an RTDE input; got '
@@ -77,6 +81,7 @@ def mode_functions(robot) -> dict[str, tuple[list, Callable]]:
         session.clear()
 
     return {
+        'direct_torque': ([('torque', REQUIRED), ('friction_comp', True)], direct_torque),
         'rtde_set_watchdog': ([('variable_name', REQUIRED), ('min_frequency', REQUIRED), ('action', 'pause')],
                               watchdog),
         'force_mode': ([('task_frame', REQUIRED), ('selection_vector', REQUIRED), ('wrench', REQUIRED),

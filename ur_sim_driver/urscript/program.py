@@ -84,6 +84,8 @@ class ScriptProgram:
         self._touch_from: int | None = None  # the cycle a tool contact began (tool_contact)
         self.force_settings = {'gain_scaling': 1.0, 'damping': 0.005}  # force_mode_set_gain_scaling, _damping
         self.free = False  # freedrive (teach mode): the robot holds the arm up and lets it be moved
+        self._torques: np.ndarray | None = None  # direct_torque's, for the cycle _torque_cycle
+        self._torque_cycle = -1
         self._waypoint: np.ndarray | None = None  # the joints at the end of the current move (None: no end)
         # rtde_set_watchdog: RTDE input variable -> (the longest gap between its updates [s], action, since [s])
         self._watchdogs: dict[str, tuple[float, str, float]] = {}
@@ -99,9 +101,12 @@ class ScriptProgram:
             self.take_over(state)
         self._history.append(state.q.copy())
         self._cycle += 1
-        if self.free:  # where the arm is pushed to is where it holds when freedrive ends
+        if self.free or self._torque_cycle == self._cycle - 1:
+            # freedrive: where the arm is pushed to is where it holds when it ends; torque control that ended: where
+            # the arm can stop, braking as hard as the robot does (as it ends the driver's torque control)
             zero = np.zeros_like(state.q)
-            self._ref = TrajectorySample(state.q.copy(), zero, zero.copy(), 0, True)
+            hold = state.q.copy() if self.free else self.sim.stopping_point(state)
+            self._ref = TrajectorySample(hold, zero, zero.copy(), 0, True)
         factor = self._factor()
         current = self._move
         if current is not None:  # where the current move is now: a move the program starts this cycle starts there
@@ -133,9 +138,16 @@ class ScriptProgram:
         self._qd_nominal = qd
         self._ref = TrajectorySample(q, qd * factor, qdd * factor * factor, 0, self._move_t >= self._move.duration)
 
-    def torques(self) -> None:
-        """A program moves the arm through the robot's servo (ur_sim's URScript has no direct_torque)."""
-        return None
+    def torques(self) -> np.ndarray | None:
+        """The torques direct_torque commanded in this cycle (on top of gravity compensation), or None: the robot's
+        servo moves the arm."""
+        return self._torques if self._torque_cycle == self._cycle else None
+
+    def direct_torque(self, torques: np.ndarray) -> None:
+        """direct_torque: these joint torques [N m] for this control cycle; the arm is out of the servo's hands while
+        a thread calls it every cycle (the current move ends)."""
+        self._move = None
+        self._torques, self._torque_cycle = np.array(torques, float), self._cycle
 
     def halt(self, q: np.ndarray, reason: str) -> None:
         self._stop(ScriptError(f'the robot halted the program: {reason}'), q)
