@@ -16,8 +16,9 @@ from lark import Token, Tree
 
 from ur_sim_driver.errors import ScriptError
 from ur_sim_driver.urscript.builtins import builtins
+from ur_sim_driver.urscript.operators import arith, bind, compare, copy
 from ur_sim_driver.urscript.threads import Threads
-from ur_sim_driver.urscript.values import REQUIRED, Pose, Request, ThreadHandle, is_number, show, truth
+from ur_sim_driver.urscript.values import Pose, Request, ThreadHandle, is_number, show, truth
 
 # A loop that runs this many times without spending robot time is the controller's "infinite loop" error.
 MAX_ITERATIONS_WITHOUT_TIME = 100_000
@@ -155,7 +156,7 @@ class Interpreter:
         into = self.globals if declared == 'global' or (name in self.globals and name not in scope
                                                          and declared != 'local') else scope
         if target.data == 'var_target':
-            into[name] = _copy(value)
+            into[name] = copy(value)
             return
         container = self._lookup(name, scope)
         subscripts = target.children[1:]  # m[i, j] = v: row i, column j of a matrix
@@ -173,7 +174,7 @@ class Interpreter:
                 raise ScriptError(f'{name} is not a list; only list elements can be assigned by index')
             index = self._index(index, len(container), name)
             if k == len(subscripts) - 1:
-                container[index] = _copy(value)
+                container[index] = copy(value)
             else:
                 container = container[index]
 
@@ -244,7 +245,7 @@ class Interpreter:
             return self._run_thread(str(node.children[0]))
         if kind == 'neg':
             value = yield from self._eval(node.children[0], scope)
-            return _arith('-', 0, value) if not isinstance(value, list) else [-v for v in value]
+            return arith('-', 0, value) if not isinstance(value, list) else [-v for v in value]
         if kind == 'not_':
             return not truth((yield from self._eval(node.children[0], scope)))
         if kind in ('and_', 'or_', 'xor_'):
@@ -258,11 +259,11 @@ class Interpreter:
         if kind == 'compare':
             left = yield from self._eval(node.children[0], scope)
             right = yield from self._eval(node.children[2], scope)
-            return _compare(str(node.children[1]), left, right)
+            return compare(str(node.children[1]), left, right)
         if kind == 'binop':
             left = yield from self._eval(node.children[0], scope)
             right = yield from self._eval(node.children[2], scope)
-            return _arith(str(node.children[1]), left, right)
+            return arith(str(node.children[1]), left, right)
         if kind == 'factor':  # unary plus
             return (yield from self._eval(node.children[0], scope))
         raise ScriptError(f'{kind} is not supported by ur_sim')
@@ -308,7 +309,7 @@ class Interpreter:
             raise ScriptError(f'unknown function {name!r}: it is not defined in the program and not among the '
                               'functions ur_sim supports (docs/urscript.md)')
         parameters, function = self.builtins[name]
-        bound = _bind(name, parameters, positional, keywords)
+        bound = bind(name, parameters, positional, keywords)
         result = function(*bound)
         if isinstance(result, Request):
             if self.secondary:
@@ -319,7 +320,7 @@ class Interpreter:
     def _interpreter_mode(self, positional: list, keywords: dict, scope: dict):
         """interpreter_mode(clearQueueOnEnter=True, clearOnEnd=True): execute the statements the interpreter socket
         takes, in order and in this scope, until end_interpreter(); sync while none waits."""
-        clear_queue, clear_on_end = _bind('interpreter_mode', [('clearQueueOnEnter', True), ('clearOnEnd', True)],
+        clear_queue, clear_on_end = bind('interpreter_mode', [('clearQueueOnEnter', True), ('clearOnEnd', True)],
                                           positional, keywords)
         thread = self.threads.current
         if self.secondary or thread.number != 0:
@@ -373,64 +374,3 @@ class Interpreter:
 
 def _block(definition: Tree) -> list:
     return next(c for c in definition.children if isinstance(c, Tree) and c.data == 'block').children
-
-
-def _bind(name: str, parameters: list, positional: list, keywords: dict) -> list:
-    """Arguments in parameter order; parameters are (name, default or REQUIRED)."""
-    names = [p for p, _ in parameters]
-    if len(positional) > len(parameters):
-        raise ScriptError(f'{name}() takes at most {len(parameters)} arguments ({", ".join(names)}); '
-                          f'got {len(positional)}')
-    values = list(positional) + [None] * (len(parameters) - len(positional))
-    for key, value in keywords.items():
-        if key not in names:
-            raise ScriptError(f'{name}() has no argument {key!r}; its arguments: {", ".join(names)}')
-        values[names.index(key)] = value
-    for k, (param, default) in enumerate(parameters):
-        if values[k] is None and k >= len(positional) and param not in keywords:
-            if default is REQUIRED:
-                raise ScriptError(f'{name}() needs argument {param!r} ({", ".join(names)})')
-            values[k] = default
-    return values
-
-
-def _copy(value):
-    return [_copy(v) for v in value] if isinstance(value, list) else value
-
-
-def _compare(op: str, a, b) -> bool:
-    if op in ('==', '!='):
-        equal = (a == b) if not (isinstance(a, Pose) or isinstance(b, Pose)) else a == b
-        return equal if op == '==' else not equal
-    if not (is_number(a) and is_number(b)):
-        raise ScriptError(f'{show(a)} {op} {show(b)}: only numbers are ordered')
-    return {'<': a < b, '>': a > b, '<=': a <= b, '>=': a >= b}[op]
-
-
-def _arith(op: str, a, b):
-    if isinstance(a, str) and isinstance(b, str) and op == '+':
-        return a + b
-    if isinstance(a, Pose) and isinstance(b, Pose) and op in '+-':
-        sign = 1.0 if op == '+' else -1.0
-        return Pose(tuple(x + sign * y for x, y in zip(a.values, b.values)))
-    if isinstance(a, list) or isinstance(b, list):
-        la = a if isinstance(a, list) else [a] * len(b)
-        lb = b if isinstance(b, list) else [b] * len(a)
-        if len(la) != len(lb):
-            raise ScriptError(f'{show(a)} {op} {show(b)}: the lists differ in length')
-        return [_arith(op, x, y) for x, y in zip(la, lb)]
-    if not (is_number(a) and is_number(b)):
-        raise ScriptError(f'{show(a)} {op} {show(b)}: not numbers')
-    if op == '+':
-        return a + b
-    if op == '-':
-        return a - b
-    if op == '*':
-        return a * b
-    if b == 0:
-        raise ScriptError(f'{show(a)} {op} 0: division by zero')
-    if op == '/':
-        return a // b if isinstance(a, int) and isinstance(b, int) and a % b == 0 else a / b
-    return a % b
-
-
