@@ -52,10 +52,15 @@ class Lockstep:
     still; waits for something the robot does step it and check the condition after every cycle.
     """
 
-    LAG = 0.1  # [s] of robot time a followed listener may lag: 50 cycles, well under a listener's queue of 1000
+    # Control cycles a followed listener may lag: fewer than the history of 10 samples ur_sim's publishers keep (the
+    # joint state broadcaster's depth, as upstream's). A sample the transport drops under load is then still in the
+    # writer's history when the reader asks for it again; with 50 cycles of lag a loaded machine lost 92 joint states
+    # of a followed listener for good (a clean-clone CI run).
+    LAG_CYCLES = 5
 
     def __init__(self, node: UrSimNode) -> None:
         self.node = node
+        self.LAG = self.LAG_CYCLES * node.sim.control_dt  # [s] of robot time
         self._lock = threading.Lock()  # one thread steps at a time
         self._views: list = []  # callables giving a followed listener's newest robot time [s]
 
