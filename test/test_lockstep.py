@@ -5,7 +5,7 @@ import time
 import numpy as np
 import pytest
 from sensor_msgs.msg import JointState
-from sim_harness import following, running_sim
+from sim_harness import following, running_sim, wait_for
 
 from ur_sim_driver.motion import conversions as conv
 
@@ -29,7 +29,10 @@ def test_a_followed_slow_listener_misses_no_cycle(h):
     stop = h.listen(JointState, '/joint_states', slow, depth=DEPTH)
     try:
         with following(lambda: stamps[-1] if stamps else None):
-            h.wait_sim_time(0.02)  # the first message: the listener has matched
+            # Until its first message a listener is not followed (the cycles before its subscription matched are not
+            # its to see): wait for it, then measure from the cycles it is followed in.
+            wait_for(lambda: stamps, what='the first joint state at the listener')
+            h.wait_sim_time(0.02)
             first = len(stamps)
             h.wait_sim_time(1.0)  # 500 cycles, five times the queue
     finally:
