@@ -21,7 +21,9 @@ from ur_sim_driver.urscript.values import (
     Request,
     ThreadHandle,
     is_number,
+    numbers,
     pose_add,
+    pose_argument,
     pose_dist,
     pose_inv,
     pose_trans,
@@ -41,19 +43,6 @@ def _number(name: str, value, low: float = -math.inf, high: float = math.inf) ->
 def _integer(name: str, value, low: int, high: int) -> int:
     if not isinstance(value, int) or isinstance(value, bool) or not low <= value <= high:
         raise ScriptError(f'{name} is an integer in [{low}, {high}]; got {show(value)}')
-    return value
-
-
-def _vector(name: str, value, n: int = 6) -> list[float]:
-    items = value.values if isinstance(value, Pose) else value
-    if not isinstance(items, (list, tuple)) or len(items) != n or not all(is_number(v) for v in items):
-        raise ScriptError(f'{name} is a list of {n} numbers; got {show(value)}')
-    return [float(v) for v in items]
-
-
-def _pose(name: str, value) -> Pose:
-    if not isinstance(value, Pose):
-        raise ScriptError(f'{name} is a pose p[x, y, z, rx, ry, rz]; got {show(value)}')
     return value
 
 
@@ -91,19 +80,19 @@ def builtins(robot) -> dict[str, tuple[list, Callable]]:
         robot.set_analog_out(_integer('set_analog_out: n', n, 0, 1), _number('set_analog_out: f', f, 0.0, 1.0))
 
     def set_payload(m, cog=None):
-        robot.set_payload(_number('set_payload: m', m, 0.0), _vector('set_payload: cog', cog, 3) if cog is not None
+        robot.set_payload(_number('set_payload: m', m, 0.0), numbers('set_payload: cog', cog, 3) if cog is not None
                           else [0.0, 0.0, 0.0])
 
     def inverse_kin(x, qnear=None, maxPositionError=1e-10, maxOrientationError=1e-10, tcp=None):  # noqa: N803
-        return robot.inverse_kin(_pose('get_inverse_kin: x', x),
-                                 None if qnear is None else _vector('get_inverse_kin: qnear', qnear))
+        return robot.inverse_kin(pose_argument('get_inverse_kin: x', x),
+                                 None if qnear is None else numbers('get_inverse_kin: qnear', qnear))
 
     def sleep(t):
         return Request('sleep', (_number('sleep: t', t, 0.0),))
 
     def norm(a):
         if isinstance(a, (list, Pose)):
-            return float(np.linalg.norm(_vector('norm: a', a, len(a.values if isinstance(a, Pose) else a))))
+            return float(np.linalg.norm(numbers('norm: a', a, len(a.values if isinstance(a, Pose) else a))))
         return abs(_number('norm: a', a))
 
     def text(name: str, value) -> str:
@@ -167,12 +156,13 @@ def builtins(robot) -> dict[str, tuple[list, Callable]]:
         'get_inverse_kin': ([('x', R), ('qnear', None), ('maxPositionError', 1e-10),
                              ('maxOrientationError', 1e-10), ('tcp', None)], inverse_kin),
         'pose_trans': ([('p_from', R), ('p_from_to', R)],
-                       lambda a, b: pose_trans(_pose('pose_trans: p_from', a), _pose('pose_trans: p_from_to', b))),
-        'pose_inv': ([('p_from', R)], lambda a: pose_inv(_pose('pose_inv: p_from', a))),
-        'pose_add': ([('p_1', R), ('p_2', R)], lambda a, b: pose_add(_pose('pose_add: p_1', a),
-                                                                     _pose('pose_add: p_2', b))),
-        'pose_dist': ([('p_from', R), ('p_to', R)], lambda a, b: pose_dist(_pose('pose_dist: p_from', a),
-                                                                           _pose('pose_dist: p_to', b))),
+                       lambda a, b: pose_trans(pose_argument('pose_trans: p_from', a),
+                                               pose_argument('pose_trans: p_from_to', b))),
+        'pose_inv': ([('p_from', R)], lambda a: pose_inv(pose_argument('pose_inv: p_from', a))),
+        'pose_add': ([('p_1', R), ('p_2', R)], lambda a, b: pose_add(pose_argument('pose_add: p_1', a),
+                                                                     pose_argument('pose_add: p_2', b))),
+        'pose_dist': ([('p_from', R), ('p_to', R)], lambda a, b: pose_dist(pose_argument('pose_dist: p_from', a),
+                                                                           pose_argument('pose_dist: p_to', b))),
         'norm': ([('a', R)], norm),
         'sqrt': ([('f', R)], lambda f: math.sqrt(_number('sqrt: f', f, 0.0))),
         'sin': ([('f', R)], lambda f: math.sin(_number('sin: f', f))),

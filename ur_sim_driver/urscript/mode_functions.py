@@ -13,16 +13,9 @@ import numpy as np
 
 from ur_sim_driver.errors import ScriptError
 from ur_sim_driver.motion.force_mode import ForceModeSpec
-from ur_sim_driver.urscript.values import REQUIRED, Pose, Request, is_number, show
+from ur_sim_driver.urscript.values import REQUIRED, Pose, Request, is_number, numbers, show
 
 WATCHDOG_ACTIONS = ('ignore', 'pause', 'stop')
-
-
-def _six(name: str, value) -> list[float]:
-    items = value.values if isinstance(value, Pose) else value
-    if not isinstance(items, (list, tuple)) or len(items) != 6 or not all(is_number(v) for v in items):
-        raise ScriptError(f'{name} is a list of 6 numbers; got {show(value)}')
-    return [float(v) for v in items]
 
 
 def _axes(value) -> list[int]:
@@ -51,17 +44,18 @@ def mode_functions(robot) -> dict[str, tuple[list, Callable]]:
     def force_mode(task_frame, selection_vector, wrench, type, limits):  # noqa: A002 (the manual's name)
         if not isinstance(task_frame, Pose):
             raise ScriptError(f'force_mode: task_frame is a pose; got {show(task_frame)}')
-        selection = _six('force_mode: selection_vector', selection_vector)
+        selection = numbers('force_mode: selection_vector', selection_vector)
         if not all(v in (0, 1) for v in selection):
             raise ScriptError(f'force_mode: selection_vector is six 0 or 1; got {show(selection_vector)}')
         if type not in (1, 2, 3):
             raise ScriptError(f'force_mode: type is 1, 2 or 3; got {show(type)}')
-        bounds = np.abs(_six('force_mode: limits', limits))
-        robot.set_force_mode(ForceModeSpec(task_frame.matrix(), np.array(selection, bool),
-                                           np.array(_six('force_mode: wrench', wrench)), int(type), bounds, 0.0, 0.0))
+        bounds = np.abs(numbers('force_mode: limits', limits))
+        wrench = np.array(numbers('force_mode: wrench', wrench))
+        robot.set_force_mode(ForceModeSpec(task_frame.matrix(), np.array(selection, bool), wrench, int(type), bounds,
+                                           0.0, 0.0))
 
     def direct_torque(torque, friction_comp=True):
-        robot.direct_torque(np.array(_six('direct_torque: torque', torque)))
+        robot.direct_torque(np.array(numbers('direct_torque: torque', torque)))
         return Request('sync')  # it holds the thread until the next control cycle, as the robot's does
 
     def watchdog(variable_name, min_frequency, action='pause'):

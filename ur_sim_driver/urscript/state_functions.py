@@ -11,14 +11,7 @@ import numpy as np
 from scipy.spatial.transform import Rotation
 
 from ur_sim_driver.errors import ScriptError
-from ur_sim_driver.urscript.values import REQUIRED, Pose, is_number, show
-
-
-def _floats(name: str, value, n: int) -> np.ndarray:
-    items = value.values if isinstance(value, Pose) else value
-    if not isinstance(items, (list, tuple)) or len(items) != n or not all(is_number(v) for v in items):
-        raise ScriptError(f'{name} is a list of {n} numbers; got {show(value)}')
-    return np.array(items, float)
+from ur_sim_driver.urscript.values import REQUIRED, Pose, is_number, numbers, pose_argument, show
 
 
 def _in(name: str, value, low: float, high: float) -> float:
@@ -43,7 +36,7 @@ def state_functions(robot) -> dict[str, tuple[list, Callable]]:
     R = REQUIRED
 
     def joints(name, q):
-        return robot.actual_q() if q is None else _floats(name, q, 6)
+        return robot.actual_q() if q is None else np.array(numbers(name, q, 6))
 
     def forward_kin(q=None, tcp=None):
         if tcp is not None and not isinstance(tcp, Pose):
@@ -54,7 +47,7 @@ def state_functions(robot) -> dict[str, tuple[list, Callable]]:
         if not isinstance(pose, Pose):
             raise ScriptError(f'get_inverse_kin_has_solution: pose is a pose; got {show(pose)}')
         try:
-            robot.inverse_kin(pose, None if qnear is None else _list(_floats('qnear', qnear, 6)))
+            robot.inverse_kin(pose, None if qnear is None else _list(np.array(numbers('qnear', qnear, 6))))
         except ScriptError:
             return False
         return True
@@ -72,16 +65,16 @@ def state_functions(robot) -> dict[str, tuple[list, Callable]]:
             except ScriptError:
                 return False
         else:
-            q = _floats('is_within_safety_limits: pose', pose, 6)
+            q = np.array(numbers('is_within_safety_limits: pose', pose, 6))
         return robot.within_joint_limits(q)
 
     def tool_contact(direction):
-        return robot.tool_contact(_floats('tool_contact: direction', direction, 6))
+        return robot.tool_contact(np.array(numbers('tool_contact: direction', direction, 6)))
 
     def set_target_payload(m, cog, inertia=None, transition_time=0.0):
-        inertia = np.zeros(6) if inertia is None else _floats('set_target_payload: inertia', inertia, 6)
-        robot.set_payload(_in('set_target_payload: m', m, 0.0, 1e3), _list(_floats('set_target_payload: cog',
-                                                                                     cog, 3)), _list(inertia))
+        inertia = np.zeros(6) if inertia is None else np.array(numbers('set_target_payload: inertia', inertia, 6))
+        robot.set_payload(_in('set_target_payload: m', m, 0.0, 1e3), _list(np.array(numbers('set_target_payload: cog',
+                                                                                     cog, 3))), _list(inertia))
 
     def gain_scaling(scaling):
         robot.force_settings['gain_scaling'] = _in('force_mode_set_gain_scaling: scaling', scaling, 0.0, 2.0)
@@ -105,8 +98,8 @@ def state_functions(robot) -> dict[str, tuple[list, Callable]]:
         'get_jacobian': ([('q', None), ('tcp', None)],
                          lambda q=None, tcp=None: [_list(row) for row in robot.jacobian(joints('get_jacobian: q', q))]),
         'is_within_safety_limits': ([('pose', R), ('qnear', None)], lambda pose, qnear=None: within_limits(pose)),
-        'pose_sub': ([('p_from', R), ('p_to', R)], lambda a, b: pose_sub(_pose('pose_sub: p_from', a),
-                                                                         _pose('pose_sub: p_to', b))),
+        'pose_sub': ([('p_from', R), ('p_to', R)], lambda a, b: pose_sub(pose_argument('pose_sub: p_from', a),
+                                                                         pose_argument('pose_sub: p_to', b))),
         'tool_contact': ([('direction', R)], tool_contact),
         'set_target_payload': ([('m', R), ('cog', R), ('inertia', None), ('transition_time', 0.0)],
                                set_target_payload),
@@ -119,7 +112,7 @@ def state_functions(robot) -> dict[str, tuple[list, Callable]]:
         'get_jacobian_time_derivative': ([], lambda: [_list(row) for row in robot.jacobian_rate(robot.actual_q(),
                                                                                                  robot.actual_qd())]),
         'get_tcp_offset': ([], lambda: robot.tcp_offset()),
-        'set_tcp': ([('pose', R)], lambda pose: robot.set_tcp(_pose('set_tcp: pose', pose))),
+        'set_tcp': ([('pose', R)], lambda pose: robot.set_tcp(pose_argument('set_tcp: pose', pose))),
         'is_steady': ([], lambda: robot.steady()),
         'get_target_waypoint': ([], lambda: robot.target_waypoint()),
         'get_joint_torques': ([], lambda: _list(robot.joint_torques())),
@@ -128,8 +121,3 @@ def state_functions(robot) -> dict[str, tuple[list, Callable]]:
         'force_mode_set_damping': ([('damping', R)], damping),
     }
 
-
-def _pose(name: str, value) -> Pose:
-    if not isinstance(value, Pose):
-        raise ScriptError(f'{name} is a pose p[x, y, z, rx, ry, rz]; got {show(value)}')
-    return value

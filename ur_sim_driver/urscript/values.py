@@ -101,3 +101,18 @@ def truth(v) -> bool:
     if is_number(v):
         return v != 0
     raise ScriptError(f'a condition is a boolean or a number; got {show(v)}')
+
+
+def numbers(name: str, value, n: int = 6) -> list[float]:
+    """`value` as `n` floats (a list or a pose); ScriptError naming `name` otherwise."""
+    items = value.values if isinstance(value, Pose) else value
+    if not isinstance(items, (list, tuple)) or len(items) != n or not all(is_number(v) for v in items):
+        raise ScriptError(f'{name} is a list of {n} numbers; got {show(value)}')
+    return [float(v) for v in items]
+
+
+def pose_argument(name: str, value) -> Pose:
+    """`value` if it is a pose; ScriptError naming `name` otherwise."""
+    if not isinstance(value, Pose):
+        raise ScriptError(f'{name} is a pose p[x, y, z, rx, ry, rz]; got {show(value)}')
+    return value
