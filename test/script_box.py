@@ -9,6 +9,7 @@ from ur_sim_driver.ports.script_sockets import ScriptSockets
 from ur_sim_driver.robot.robot_state import RobotState
 from ur_sim_driver.robot.sim_config import SimConfig
 from ur_sim_driver.robot.simulator import Simulator
+from ur_sim_driver.robot.software import parse_version
 from ur_sim_driver.urscript.runner import RUNTIME_ERROR, ScriptRunner
 
 READY = [0.0, -1.2, 1.2, -1.57, -1.57, 0.0]  # [rad] an elbow-bent pose, away from singularities
@@ -26,9 +27,11 @@ COUNTER = '''  global ticks = 0
 class Box:
     """The simulated robot with its program slot, stepped cycle by cycle as the simulation loop steps it."""
 
-    def __init__(self, q0=READY, factor: float = 1.0, before_step=None) -> None:
-        """`before_step`: called before each control cycle (a test's loopback server answers there)."""
-        self.sim = Simulator(SimConfig(ur_type='ur5e', initial_positions=tuple(q0)))
+    def __init__(self, q0=READY, factor: float = 1.0, before_step=None, software_version: str = '') -> None:
+        """`before_step`: called before each control cycle (a test's loopback server answers there);
+        `software_version`: the controller's ('': the type's default)."""
+        version = parse_version(software_version, 'ur5e')
+        self.sim = Simulator(SimConfig(ur_type='ur5e', initial_positions=tuple(q0), software_version=version))
         self.robot = RobotState()
         self.factor = factor
         self.log: list[str] = []
@@ -66,7 +69,7 @@ class Box:
         if program is not None and program.free:  # freedrive, torque control: as the simulation loop does
             self.sim.advance_free(state)
         elif torques is not None:
-            self.sim.advance_torque(state, torques)
+            self.sim.advance_torque(state, torques, program.friction_scales)
         else:
             self.sim.advance(state, sample, stop)
         self.runner.after_cycle()

@@ -245,6 +245,34 @@ def test_inputs_change_the_robot_and_show_on_the_ros_side(h):
         client.close()
 
 
+def test_an_external_force_torque_sensor_feeds_the_robots_reading_once_a_program_enables_it(h):
+    client = _connect(h)
+    try:
+        recipe, types = client.inputs(['external_force_torque'])
+        assert recipe == 1 and types == ['VECTOR6D']
+        _, out_types = client.outputs(500.0, ['actual_TCP_force', 'ft_raw_wrench'])
+        assert client.request(ord('S')) == b'\x01'
+        reading = (0.0, 0.0, -20.0, 0.0, 0.0, 0.0)  # 20 N pushing up the tool, in the sensor's (tool0's) axes
+        payload = struct.pack('>B6d', recipe, *reading)
+        client.sock.sendall(struct.pack('>HB', 3 + len(payload), ord('U')) + payload)
+        wait_for(lambda: h.sim.sim.external_ft_input[2] == -20.0, what='the input taken')
+        assert abs(h.sim.sim.wrench()[2]) < 5.0  # not the robot's reading until a program enables the sensor
+        with h.sim.host.lock:
+            h.sim.host.scripts.submit('ft_rtde_input_enable(True)')
+        wait_for(lambda: h.sim.sim.external_ft is not None, what='the external sensor enabled')
+        while True:  # the packages of the cycles before are queued first
+            force, raw = _unpack(out_types, client.data()[1])
+            if raw[2] == -20.0:
+                break
+        rot = Rotation.from_quat(h.sim.sim.physics.tcp_pose()[1]).as_matrix()
+        assert np.allclose(force[:3], rot @ reading[:3], atol=1e-9) and np.allclose(raw, reading)
+    finally:
+        client.close()
+        with h.sim.host.lock:
+            h.sim.host.scripts.submit('ft_rtde_input_enable(False)')
+        wait_for(lambda: h.sim.sim.external_ft is None, what='the external sensor disabled')
+
+
 def test_a_ur_rtde_program_reads_the_robot_and_sets_an_output():
     """ur_rtde (PyPI ur-rtde), as its users run it, against ur_sim's RTDE on 30004: on a loopback address of this
     test process's own (ur_rtde has no port argument; ROS_DOMAIN_ID is unique per process), paced to the wall clock

@@ -1,11 +1,12 @@
 """URScript's state, kinematics and mode functions on the simulated robot (no ROS): what a program reads of the arm
 (actual and target joints and TCP, history, forward and inverse kinematics, Jacobian and its rate, mass matrix,
 Coriolis torques, limits, steadiness), the payload and force-mode settings it makes, and the modes it switches
-(teach mode, the sensor's zero, gravity, a protective stop)."""
+(teach mode, the sensor's zero, gravity, a protective stop, an external force-torque sensor fed through RTDE)."""
 from __future__ import annotations
 
 import numpy as np
 import pytest
+from scipy.spatial.transform import Rotation
 from script_box import READY, Box
 
 from ur_sim_driver.robot.robot_state import PLAYING, PROTECTIVE_STOP, STOPPED
@@ -257,3 +258,39 @@ end''')
     assert box.log == ['True', 'True', 'True']
     # after torque control the servo stops the arm as hard as the robot brakes, and holds it there
     assert np.abs(q[-1] - q[-100]).max() < 1e-6 and abs(q[-1][5] - q[350][5]) < 0.6
+
+
+def test_tcp_force_joint_positions_and_interpolate_pose():
+    box = Box()
+    box.run('''def prog():
+  textmsg(get_joint_positions() == get_actual_joint_positions())
+  textmsg(interpolate_pose(p[0, 0, 0, 0, 0, 0], p[0.2, 0, -0.4, 0, 0, 1.0], 0.25))
+  textmsg(interpolate_pose(p[0.1, 0, 0, 0, 0, 0.5], p[0.3, 0, 0, 0, 0, -0.5], 1.0))
+  ft_rtde_input_enable(True, 0.2, [0, 0, 0.05], [0, 0, 0.02])
+  textmsg(get_tcp_force())
+end''')
+    box.sim.external_ft_input = np.array([0.0, 0.0, 0.0, 0.0, 0.0, 0.0])
+    assert not box.errors(), box.errors()
+    assert box.log[0] == 'True'
+    assert np.allclose(_values(box.log[1]), [0.05, 0.0, -0.1, 0.0, 0.0, 0.25], atol=1e-6)
+    assert np.allclose(_values(box.log[2]), [0.3, 0.0, 0.0, 0.0, 0.0, -0.5], atol=1e-6)
+    # The external sensor reads nothing yet; no payload is believed: the TCP force is zero in every axis.
+    assert np.allclose(_values(box.log[3]), 0.0, atol=1e-9)
+
+
+def test_the_external_sensors_reading_is_the_robots_in_base_axes_about_the_tcp():
+    box = Box()
+    box.run('''def prog():
+  ft_rtde_input_enable(True, sensor_measuring_offset=[0, 0, 0.1])
+end''')
+    box.sim.external_ft_input = np.array([2.0, 0.0, 0.0, 0.0, 0.0, 0.0])  # 2 N along tool0's x, 10 cm out
+    flange = box.sim.wrench()
+    assert np.allclose(flange, [2.0, 0.0, 0.0, 0.0, 0.2, 0.0])  # about the flange: 0.1 m x 2 N about y
+    rot = Rotation.from_quat(box.sim.physics.tcp_pose()[1]).as_matrix()
+    assert np.allclose(box.sim.tcp_force(), np.concatenate((rot @ flange[:3], rot @ flange[3:])))
+    box.sim.zero_ftsensor()  # the zero is taken off the external reading too
+    assert np.allclose(box.sim.wrench(), 0.0)
+    box.run('def prog():\n  ft_rtde_input_enable(True, sensor_cog=[0, 0, 6])\nend')
+    (error,) = box.errors()
+    assert 'ft_rtde_input_enable: sensor_cog = [0.0, 0.0, 6.0] is more than 5.0 m from the flange' in error.text
+    assert box.sim.external_ft is not None  # the earlier setting stays

@@ -11,7 +11,7 @@ driver's services do: an output set here shows on ``/io_and_status_controller/io
 
 Frames and units as the RTDE guide gives them: poses ``[x, y, z, rx, ry, rz]`` in the base frame (rotation
 vector), ``actual_TCP_force`` in the base frame about the TCP, joint values in rad, rad/s, rad/s^2 and N m. The TCP
-is the flange (tool0): the simulated robot's installation sets no TCP offset.
+is the flange (tool0) until a program's set_tcp moves it (the installation sets no TCP offset).
 """
 from __future__ import annotations
 
@@ -51,15 +51,6 @@ def _bits(levels) -> int:
 def _pose(host: Host) -> tuple[float, ...]:
     position, quat = host.sim.tcp_pose()
     return _vec(np.concatenate((position, Rotation.from_quat(quat).as_rotvec())))
-
-
-def _force(host: Host) -> tuple[float, ...]:
-    """The flange's wrench (tool0 axes, ``Simulator.wrench``) in base axes, about the TCP."""
-    r = Rotation.from_quat(host.sim.physics.tcp_pose()[1]).as_matrix()  # tool0's axes
-    w = host.sim.wrench()
-    force, torque = r @ w[:3], r @ w[3:]
-    lever = r @ host.sim.tcp_offset[:3]  # from tool0 to the TCP
-    return _vec(np.concatenate((force, torque - np.cross(lever, force))))
 
 
 def _target(host: Host, k: int) -> tuple[float, ...]:
@@ -122,7 +113,8 @@ READERS: dict[str, Callable[[Host], object]] = {
     'actual_current_as_torque': lambda h: _vec(h.sim.state().effort),  # the simulated motors' torques [N m]
     'actual_q': lambda h: _vec(h.sim.state().q),
     'actual_qd': lambda h: _vec(reported_velocity(h.sim.state().qd, h.sim.control_dt)),
-    'actual_TCP_pose': _pose, 'actual_TCP_force': _force, 'tcp_offset': lambda h: _vec(h.sim.tcp_offset),
+    'actual_TCP_pose': _pose, 'actual_TCP_force': lambda h: _vec(h.sim.tcp_force()),
+    'tcp_offset': lambda h: _vec(h.sim.tcp_offset),
     'actual_TCP_speed': lambda h: _vec(h.sim.tcp_velocity()),
     'target_TCP_pose': lambda h: _target_tcp(h)[0], 'target_TCP_speed': lambda h: _target_tcp(h)[1],
     'speed_scaling': lambda h: h.speed_scaling.factor, 'target_speed_fraction': lambda h: h.speed_scaling.slider,
@@ -148,7 +140,7 @@ READERS: dict[str, Callable[[Host], object]] = {
     'script_control_line': lambda h: 0,
     'elbow_position': lambda h: _elbow(h)[0], 'elbow_velocity': lambda h: _elbow(h)[1],
     'joint_mode': lambda h: (joint_mode(h.robot.robot_mode),) * 6,
-    'ft_raw_wrench': lambda h: _vec(h.sim.physics.wrench()),  # neither zeroed nor payload-compensated; tool0 axes
+    'ft_raw_wrench': lambda h: _vec(h.sim.raw_wrench()),  # neither zeroed nor payload-compensated; tool0 axes
     **{name: (lambda h: NAN6) for name in ('target_current', 'actual_current', 'joint_control_output',
                                             'joint_temperatures', 'actual_joint_voltage')},
     **{name: (lambda h: NAN) for name in ('actual_execution_time', 'actual_momentum', 'actual_main_voltage',
@@ -162,7 +154,7 @@ WRITABLE = frozenset({
     'speed_slider_mask', 'speed_slider_fraction', 'standard_digital_output_mask', 'standard_digital_output',
     'configurable_digital_output_mask', 'configurable_digital_output', 'tool_digital_output_mask',
     'tool_digital_output', 'standard_analog_output_mask', 'standard_analog_output_type', 'standard_analog_output_0',
-    'standard_analog_output_1', 'input_bit_registers0_to_31', 'input_bit_registers32_to_63',
+    'standard_analog_output_1', 'external_force_torque', 'input_bit_registers0_to_31', 'input_bit_registers32_to_63',
     *(f'input_bit_register_{k}' for k in range(64, 128)), *(f'input_int_register_{k}' for k in range(48)),
     *(f'input_double_register_{k}' for k in range(48)),
 })
@@ -198,6 +190,12 @@ def write(host: Host, values: dict[str, object]) -> list[str]:
             host.speed_scaling.slider = f
         else:
             refused.append(f'speed_slider_fraction = {f} is outside [{SLIDER_MIN}, {SLIDER_MAX}]')
+    if 'external_force_torque' in values:  # read while ft_rtde_input_enable has enabled the external sensor
+        reading = np.array(values['external_force_torque'], dtype=float)
+        if np.all(np.isfinite(reading)):
+            host.sim.external_ft_input = reading
+        else:
+            refused.append(f'external_force_torque = {reading.tolist()}: not finite')
     written = host.robot.rtde_inputs  # for URScript's rtde_set_watchdog
     for name in values:
         written[name] = host.sim.time

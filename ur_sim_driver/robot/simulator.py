@@ -28,6 +28,7 @@ from ur_sim_driver.physics.servo import JointServo, Setpoint
 from ur_sim_driver.physics.tool_contact import FLANGE_LINK, contact_threshold, tool_bodies
 from ur_sim_driver.physics.torque_control import PdGains
 from ur_sim_driver.robot.direct_torque import DEFAULT_SCALES, FrictionScales, felt_friction
+from ur_sim_driver.robot.external_ft import ExternalFtSensor
 from ur_sim_driver.robot.io_bank import IoBank
 from ur_sim_driver.robot.payload import NO_PAYLOAD, Payload, make_payload
 from ur_sim_driver.robot.sim_config import SimConfig
@@ -69,6 +70,7 @@ class Simulator:
 
     def __init__(self, cfg: SimConfig) -> None:
         self.params = load_ur_params(cfg.simulated_ur_type)  # the robot's own, whatever the driver is told
+        self.software_version = cfg.software_version  # what the controller runs (URScript's functions depend on it)
         tool = get_tool(cfg.tool)
         self.control_rate = cfg.update_rate or self.params.control_rate
         self.control_dt = 1.0 / self.control_rate
@@ -118,6 +120,9 @@ class Simulator:
         if cfg.mounted_payload.mass > 0.0:
             self.mount(cfg.mounted_payload)
         self._ft_offset = np.zeros(6)
+        # ft_rtde_input_enable: the reading comes from RTDE's external_force_torque (None: the arm's own sensor)
+        self.external_ft: ExternalFtSensor | None = None
+        self.external_ft_input = np.zeros(6)  # the RTDE input external_force_torque as last written
         # The gravity the robot's controller believes in (set_gravity: anti-gravity in the base frame [m/s^2]);
         # None: the one the arm is under, as a correctly installed robot's.
         self.gravity_belief: np.ndarray | None = None
@@ -177,16 +182,18 @@ class Simulator:
         self._servo_active = False
         return tau
 
-    def advance_torque(self, state: ArmState, torques: np.ndarray) -> np.ndarray:
+    def advance_torque(self, state: ArmState, torques: np.ndarray, scales: FrictionScales | None = None) -> np.ndarray:
         """Torque control (direct_torque) for one control period: `torques` (n,) [N m] on top of the robot's gravity
         compensation (:meth:`gravity_compensation`), within the effort limits and without driving a joint past its
         speed limit (as under position control); the joints feel the friction the robot's compensation leaves
-        (``direct_torque.felt_friction``). Returns the motor torques (n,) [N m]. The servo restarts from the
+        (``direct_torque.felt_friction``; `scales`: this command's compensation, a URScript direct_torque's, else
+        :attr:`friction_scales`). Returns the motor torques (n,) [N m]. The servo restarts from the
         measured state, so that position control resumes without a jump."""
         p = self.params
-        if self._felt_scales is not self.friction_scales:
-            self._felt_scales = self.friction_scales
-            self.physics.set_joint_friction(*felt_friction(p.damping, p.coulomb, self.friction_scales))
+        scales = self.friction_scales if scales is None else scales
+        if self._felt_scales is not scales:
+            self._felt_scales = scales
+            self.physics.set_joint_friction(*felt_friction(p.damping, p.coulomb, scales))
         tau = np.asarray(torques, dtype=float) + self.gravity_compensation()
         # No drive turns its joint past the speed limit within the period, as under position control (there the
         # servo's accelerations are bounded so): per joint, from its own inertia and the model's bias torques.
@@ -316,12 +323,28 @@ class Simulator:
         cx, cy, cz = (float(v) for v in self.payload.cog)
         return np.array((fx, fy, fz, cy * fz - cz * fy, cz * fx - cx * fz, cx * fy - cy * fx))
 
+    def raw_wrench(self) -> np.ndarray:
+        """(6,) the force-torque sensor's reading before payload compensation and zero, tool0 axes about the tool0
+        origin: the arm's own sensor (what tool, mounted payload and contacts exert on it), or the external sensor's
+        RTDE input while one is enabled (``external_ft.py``)."""
+        if self.external_ft is None:
+            return self.physics.wrench()
+        return self.external_ft.at_flange(self.external_ft_input)
+
     def wrench(self) -> np.ndarray:
         """(6,) force [N] and torque [N m] at the flange, in tool0 axes about the tool0 origin (the driver's
-        tool0_controller frame), as the robot reports it: what tool, mounted payload and contacts exert on the arm,
-        less the believed payload's weight (set_payload) and less the reading at the last :meth:`zero_ftsensor`."""
-        return self.physics.wrench() - self._believed_weight() - self._ft_offset
+        tool0_controller frame), as the robot reports it: :meth:`raw_wrench` less the believed payload's weight
+        (set_payload) and less the reading at the last :meth:`zero_ftsensor`."""
+        return self.raw_wrench() - self._believed_weight() - self._ft_offset
+
+    def tcp_force(self) -> np.ndarray:
+        """(6,) :meth:`wrench` in base axes about the TCP (RTDE ``actual_TCP_force``, ``get_tcp_force``)."""
+        r = Rotation.from_quat(self.physics.tcp_pose()[1]).as_matrix()  # tool0's axes
+        w = self.wrench()
+        force, torque = r @ w[:3], r @ w[3:]
+        lever = r @ self.tcp_offset[:3]  # from tool0 to the TCP
+        return np.concatenate((force, torque - np.cross(lever, force)))
 
     def zero_ftsensor(self) -> None:
         """Take the current reading as the sensor's zero, as the robot's zero_ftsensor does."""
-        self._ft_offset = self.physics.wrench() - self._believed_weight()
+        self._ft_offset = self.raw_wrench() - self._believed_weight()

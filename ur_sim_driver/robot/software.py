@@ -168,6 +168,8 @@ def required(command: str, version: SoftwareVersion) -> SoftwareVersion | None:
 # it (ScriptCommandInterface::setFrictionScales).
 TORQUE_CONTROL = (_v('5.23.0'), _v('10.10.0'))
 FRICTION_SCALES = (_v('5.25.1'), _v('10.12.1'))
+# URScript's optimovej / optimovel, as the Client Library's External Control program guards its calls of them
+OPTIMOVE = (_v('5.21.0'), _v('10.8.0'))
 
 
 def supports(version: SoftwareVersion, minima: tuple[SoftwareVersion, SoftwareVersion]) -> bool:

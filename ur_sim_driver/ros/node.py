@@ -306,7 +306,7 @@ class UrSimNode(Node):
             if getattr(commander, 'free', False):  # freedrive: the robot compensates gravity, the arm is free
                 tau = self.sim.advance_free(state)
             elif torques is not None:  # torque control: the commanded torques on top of gravity compensation
-                tau = self.sim.advance_torque(state, torques)
+                tau = self.sim.advance_torque(state, torques, getattr(commander, 'friction_scales', None))
             else:
                 tau = self.sim.advance(state, sample, stop)
             contacts = self.sim.physics.contacts()  # measured over this cycle's physics steps

@@ -12,6 +12,7 @@ import numpy as np
 from ur_sim_driver.errors import ScriptError
 from ur_sim_driver.robot.io_bank import tool_voltage_refusal
 from ur_sim_driver.robot.registers import N_BITS, N_DOUBLES, N_INTS
+from ur_sim_driver.robot.software import OPTIMOVE, supports
 from ur_sim_driver.urscript.mode_functions import mode_functions
 from ur_sim_driver.urscript.socket_functions import socket_functions
 from ur_sim_driver.urscript.state_functions import state_functions
@@ -184,6 +185,9 @@ def builtins(robot) -> dict[str, tuple[list, Callable]]:
         for side in ('input', 'output'):
             table[f'read_{side}_{kind}_register'] = register(kind, side)
         table[f'write_output_{kind}_register'] = register(kind, 'output', write=True)
+    if supports(robot.software_version(), OPTIMOVE):
+        table['optimovej'] = ([('q', R), ('a', 0.3), ('v', 0.3), ('r', 0.0)], move('optimovej'))
+        table['optimovel'] = ([('pose', R), ('a', 0.3), ('v', 0.3), ('r', 0.0)], move('optimovel'))
     table.update(socket_functions(robot))
     table.update(state_functions(robot))
     table.update(mode_functions(robot))

@@ -1,6 +1,8 @@
 """URScript's functions that change how the robot behaves rather than where it goes: freedrive and teach mode (the
 robot holds the arm up against gravity and lets it be pushed, as ``/freedrive_mode_controller`` does), the
-force-torque sensor's zero, the gravity the controller believes in, a protective stop called by the program, force
+force-torque sensor's zero, an external force-torque sensor fed through RTDE (``ft_rtde_input_enable``,
+``robot/external_ft.py``), direct torque control (from PolyScope 5.23 / 10.10: ``robot/software.py``; friction
+scales from 5.25.1 / 10.12.1), the gravity the controller believes in, a protective stop called by the program, force
 mode (the robot's one force mode, ``motion/force_mode.py``, the same as ``/force_mode_controller``'s), and the end
 and clearing of interpreter mode (``interpreter_session.py``; ``interpreter_mode()`` itself is the
 interpreter's, as it runs statements).
@@ -11,9 +13,14 @@ from collections.abc import Callable
 
 import numpy as np
 
-from ur_sim_driver.errors import ScriptError
+from ur_sim_driver.errors import ConfigError, ScriptError
 from ur_sim_driver.motion.force_mode import ForceModeSpec
-from ur_sim_driver.urscript.values import REQUIRED, Pose, Request, is_number, numbers, show
+from ur_sim_driver.robot.direct_torque import DEFAULT_SCALES, FrictionScales
+from ur_sim_driver.robot.external_ft import make_external_ft
+from ur_sim_driver.robot.software import FRICTION_SCALES, TORQUE_CONTROL, supports
+from ur_sim_driver.urscript.values import REQUIRED, Pose, Request, is_number, numbers, show, truth
+
+NO_COMPENSATION = FrictionScales.make([0.0] * 6, [0.0] * 6)  # direct_torque(friction_comp=False)
 
 WATCHDOG_ACTIONS = ('ignore', 'pause', 'stop')
 
@@ -54,9 +61,32 @@ def mode_functions(robot) -> dict[str, tuple[list, Callable]]:
         robot.set_force_mode(ForceModeSpec(task_frame.matrix(), np.array(selection, bool), wrench, int(type), bounds,
                                            0.0, 0.0))
 
-    def direct_torque(torque, friction_comp=True):
-        robot.direct_torque(np.array(numbers('direct_torque: torque', torque)))
+    def direct_torque(torque, friction_comp=True, viscous_scale=None, coulomb_scale=None):
+        torques = np.array(numbers('direct_torque: torque', torque))
+        if viscous_scale is not None or coulomb_scale is not None:  # PolyScope 5.25.1 / 10.12.1
+            scales = FrictionScales.make(
+                _scales('viscous_scale', DEFAULT_SCALES.viscous if viscous_scale is None else viscous_scale),
+                _scales('coulomb_scale', DEFAULT_SCALES.coulomb if coulomb_scale is None else coulomb_scale))
+        else:  # the robot's default compensation, or none
+            scales = DEFAULT_SCALES if truth(friction_comp) else NO_COMPENSATION
+        robot.direct_torque(torques, scales)
         return Request('sync')  # it holds the thread until the next control cycle, as the robot's does
+
+    def ft_input(name):
+        def enable(enable, sensor_mass=0.0, sensor_measuring_offset=None, sensor_cog=None):
+            if not truth(enable):
+                robot.enable_external_ft(None)
+                return
+            values = [numbers(f'{name}: {arg}', v, 3) if v is not None else [0.0, 0.0, 0.0]
+                      for arg, v in (('sensor_measuring_offset', sensor_measuring_offset), ('sensor_cog', sensor_cog))]
+            if not is_number(sensor_mass):
+                raise ScriptError(f'{name}: sensor_mass is a number [kg]; got {show(sensor_mass)}')
+            try:
+                robot.enable_external_ft(make_external_ft(float(sensor_mass), *values))
+            except ConfigError as e:
+                raise ScriptError(f'{name}: {e}') from None
+        return [('enable', REQUIRED), ('sensor_mass', 0.0), ('sensor_measuring_offset', None),
+                ('sensor_cog', None)], enable
 
     def watchdog(variable_name, min_frequency, action='pause'):
         if not isinstance(variable_name, str) or not variable_name:
@@ -74,8 +104,10 @@ def mode_functions(robot) -> dict[str, tuple[list, Callable]]:
             raise ScriptError('clear_interpreter() can only be called in interpreter mode')
         session.clear()
 
-    return {
-        'direct_torque': ([('torque', REQUIRED), ('friction_comp', True)], direct_torque),
+    version = robot.software_version()
+    table = {
+        'ft_rtde_input_enable': ft_input('ft_rtde_input_enable'),
+        'enable_external_ft_sensor': ft_input('enable_external_ft_sensor'),  # its older name
         'rtde_set_watchdog': ([('variable_name', REQUIRED), ('min_frequency', REQUIRED), ('action', 'pause')],
                               watchdog),
         'force_mode': ([('task_frame', REQUIRED), ('selection_vector', REQUIRED), ('wrench', REQUIRED),
@@ -91,3 +123,17 @@ def mode_functions(robot) -> dict[str, tuple[list, Callable]]:
         'set_gravity': ([('d', REQUIRED)], set_gravity),
         'protective_stop': ([], lambda: robot.protective_stop()),
     }
+    if supports(version, TORQUE_CONTROL):
+        arguments = [('torque', REQUIRED), ('friction_comp', True)]
+        if supports(version, FRICTION_SCALES):
+            arguments += [('viscous_scale', None), ('coulomb_scale', None)]
+        table['direct_torque'] = (arguments, direct_torque)
+    return table
+
+
+def _scales(name: str, value) -> list[float]:
+    """Six friction compensation scales, each in [0, 1]."""
+    scales = numbers(f'direct_torque: {name}', value if not isinstance(value, np.ndarray) else value.tolist(), 6)
+    if not all(0.0 <= v <= 1.0 for v in scales):
+        raise ScriptError(f'direct_torque: {name} is six numbers in [0, 1]; got {show(value)}')
+    return scales

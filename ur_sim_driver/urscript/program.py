@@ -20,6 +20,7 @@ from ur_sim_driver.errors import ConfigError, ScriptError
 from ur_sim_driver.motion.force_mode import ForceModeSpec
 from ur_sim_driver.motion.trajectory import TrajectorySample
 from ur_sim_driver.physics.physics import ArmState
+from ur_sim_driver.robot.direct_torque import FrictionScales
 from ur_sim_driver.robot.robot_state import RobotState
 from ur_sim_driver.robot.simulator import Simulator
 from ur_sim_driver.urscript.grammar import parse
@@ -31,6 +32,9 @@ from ur_sim_driver.urscript.values import Pose, Request, is_number, show
 
 END_DECELERATION = 2.0  # [rad/s^2] a program that ends while the arm moves at speed stops it with this
 ABORT_DECELERATION = 4.0  # [rad/s^2] the interpreter socket's abort stops a movej or movel with this
+# optimovel's a and v are fractions of these (ur_sim's rule: UR does not publish the tool's limits the controller
+# plans with; the speed is the default safety configuration's tool speed limit)
+OPTIMOVEL_SPEED, OPTIMOVEL_ACCELERATION = 1.5, 4.0  # [m/s], [m/s^2]
 HISTORY = 1250  # control cycles of actual joint positions kept for get_actual_joint_positions_history
 
 
@@ -56,10 +60,11 @@ class ScriptProgram(RobotAccess):
                  session: InterpreterSession | None = None,
                  force_mode: Callable[[ForceModeSpec | None], None] | None = None) -> None:
         self.source = source
+        self.sim, self.robot, self._factor, self._log = sim, robot, factor, log  # before the interpreter: its
+        # functions depend on the software version the robot runs
         self.interpreter = Interpreter(parse(source), self)
         self.name = self.interpreter.name or name
         self.secondary = self.interpreter.secondary
-        self.sim, self.robot, self._factor, self._log = sim, robot, factor, log
         self._sockets = sockets
         self._session = session if session is not None else InterpreterSession()
         self._force_mode = force_mode
@@ -80,6 +85,7 @@ class ScriptProgram(RobotAccess):
         self.free = False  # freedrive (teach mode): the robot holds the arm up and lets it be moved
         self._torques: np.ndarray | None = None  # direct_torque's, for the cycle _torque_cycle
         self._torque_cycle = -1
+        self.friction_scales: FrictionScales | None = None  # direct_torque's friction compensation
         self._waypoint: np.ndarray | None = None  # the joints at the end of the current move (None: no end)
         # rtde_set_watchdog: RTDE input variable -> (the longest gap between its updates [s], action, since [s])
         self._watchdogs: dict[str, tuple[float, str, float]] = {}
@@ -137,11 +143,13 @@ class ScriptProgram(RobotAccess):
         servo moves the arm."""
         return self._torques if self._torque_cycle == self._cycle else None
 
-    def direct_torque(self, torques: np.ndarray) -> None:
-        """direct_torque: these joint torques [N m] for this control cycle; the arm is out of the servo's hands while
-        a thread calls it every cycle (the current move ends)."""
+    def direct_torque(self, torques: np.ndarray, scales: FrictionScales) -> None:
+        """direct_torque: these joint torques [N m] for this control cycle, the robot compensating the joints'
+        friction by `scales`; the arm is out of the servo's hands while a thread calls it every cycle (the current
+        move ends)."""
         self._move = None
         self._torques, self._torque_cycle = np.array(torques, float), self._cycle
+        self.friction_scales = scales
 
     def halt(self, q: np.ndarray, reason: str) -> None:
         self._stop(ScriptError(f'the robot halted the program: {reason}'), q)
@@ -226,6 +234,12 @@ class ScriptProgram(RobotAccess):
             return ToolLine(self.ik, q0, self.ik.fk(q0), self._pose_matrix(kind, target), _positive(f'{kind}: a', a),
                             _positive(f'{kind}: v', v), _time(kind, t), self.sim.control_dt, p.q_min, p.q_max,
                             name=kind)
+        if kind in ('optimovej', 'optimovel'):  # a and v are fractions of what the arm can do
+            target, a, v, r = args
+            a, v = _fraction(f'{kind}: a', a), _fraction(f'{kind}: v', v)
+            if kind == 'optimovej':  # of the slowest joint's limits: no joint exceeds its own
+                return self._build('movej', target, a * p.a_max, v * float(np.min(p.v_max)), 0.0, r)
+            return self._build('movel', target, a * OPTIMOVEL_ACCELERATION, v * OPTIMOVEL_SPEED, 0.0, r)
         if kind == 'movec':
             via, target, a, v, _r, mode = args
             if mode not in (0, 1):
@@ -289,6 +303,12 @@ def _joints6(name: str, value) -> list[float]:
 def _positive(name: str, value) -> float:
     if not is_number(value) or not value > 0.0 or not np.isfinite(value):
         raise ScriptError(f'{name} is a number > 0; got {show(value)}')
+    return float(value)
+
+
+def _fraction(name: str, value) -> float:
+    if not is_number(value) or not 0.0 < value <= 1.0:
+        raise ScriptError(f'{name} is a fraction in (0, 1]; got {show(value)}')
     return float(value)
 
 

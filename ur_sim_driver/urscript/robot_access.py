@@ -18,6 +18,8 @@ from ur_sim_driver.errors import ScriptError
 from ur_sim_driver.motion.force_mode import ForceModeSpec
 from ur_sim_driver.motion.trajectory import TrajectorySample
 from ur_sim_driver.physics.tool_contact import strongest_touch
+from ur_sim_driver.robot.external_ft import ExternalFtSensor
+from ur_sim_driver.robot.software import SoftwareVersion
 from ur_sim_driver.urscript.interpreter_session import InterpreterSession
 from ur_sim_driver.urscript.moves import tool_jacobian
 from ur_sim_driver.urscript.values import Pose
@@ -96,6 +98,18 @@ class RobotAccess:
     def tcp_speed(self, q: np.ndarray, qd: np.ndarray) -> np.ndarray:
         """(6,) the TCP's linear [m/s] and angular [rad/s] velocity, base axes."""
         return tool_jacobian(self.ik, q) @ np.asarray(qd, float)
+
+    def tcp_force(self) -> np.ndarray:
+        """(6,) the force [N] and torque [N m] at the TCP, base axes (``Simulator.tcp_force``)."""
+        return self.sim.tcp_force()
+
+    def enable_external_ft(self, sensor: ExternalFtSensor | None) -> None:
+        """ft_rtde_input_enable: the force-torque reading from RTDE's external_force_torque (None: the arm's own
+        sensor). It stays after the program, as the robot's setting does."""
+        self.sim.external_ft = sensor
+
+    def software_version(self) -> SoftwareVersion:
+        return self.sim.software_version
 
     def within_joint_limits(self, q: np.ndarray) -> bool:
         p = self.sim.params

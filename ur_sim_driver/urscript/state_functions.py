@@ -1,7 +1,8 @@
 """URScript's functions that read the robot's state and kinematics, and the settings programs make before they move:
 actual and target joints and TCP, the joint positions of earlier cycles, forward and inverse kinematics, the
 safety limits, tool contact, the payload the robot believes in, and force mode's gain and damping. Poses are in the
-robot's base frame (``base``, DH frame 0), the TCP at ``tool0``, as RTDE reports them. What they read goes through
+robot's base frame (``base``, DH frame 0), the TCP at ``tool0``, as RTDE reports them; the TCP force as RTDE's
+``actual_TCP_force`` (base axes, about the TCP). What they read goes through
 the program's robot (``program.py``)."""
 from __future__ import annotations
 
@@ -11,7 +12,15 @@ import numpy as np
 from scipy.spatial.transform import Rotation
 
 from ur_sim_driver.errors import ScriptError
-from ur_sim_driver.urscript.values import REQUIRED, Pose, is_number, numbers, pose_argument, show
+from ur_sim_driver.urscript.values import (
+    REQUIRED,
+    Pose,
+    interpolate_pose,
+    is_number,
+    numbers,
+    pose_argument,
+    show,
+)
 
 
 def _in(name: str, value, low: float, high: float) -> float:
@@ -84,6 +93,9 @@ def state_functions(robot) -> dict[str, tuple[list, Callable]]:
 
     return {
         'get_steptime': ([], lambda: robot.steptime()),
+        # Not in the manual, but the controller knows it and the Client Library's External Control program calls it
+        'get_joint_positions': ([], lambda: robot.joint_positions()),
+        'get_tcp_force': ([], lambda: _list(robot.tcp_force())),
         'get_actual_joint_speeds': ([], lambda: _list(robot.actual_qd())),
         'get_target_joint_positions': ([], lambda: _list(robot.target_q())),
         'get_target_joint_speeds': ([], lambda: _list(robot.target_qd())),
@@ -98,6 +110,10 @@ def state_functions(robot) -> dict[str, tuple[list, Callable]]:
         'get_jacobian': ([('q', None), ('tcp', None)],
                          lambda q=None, tcp=None: [_list(row) for row in robot.jacobian(joints('get_jacobian: q', q))]),
         'is_within_safety_limits': ([('pose', R), ('qnear', None)], lambda pose, qnear=None: within_limits(pose)),
+        'interpolate_pose': ([('p_from', R), ('p_to', R), ('alpha', R)],
+                             lambda a, b, alpha: interpolate_pose(pose_argument('interpolate_pose: p_from', a),
+                                                                  pose_argument('interpolate_pose: p_to', b),
+                                                                  _in('interpolate_pose: alpha', alpha, -1e9, 1e9))),
         'pose_sub': ([('p_from', R), ('p_to', R)], lambda a, b: pose_sub(pose_argument('pose_sub: p_from', a),
                                                                          pose_argument('pose_sub: p_to', b))),
         'tool_contact': ([('direction', R)], tool_contact),

@@ -54,6 +54,16 @@ def pose_dist(p_from: Pose, p_to: Pose) -> float:
     return float(np.linalg.norm(np.subtract(p_from.values[:3], p_to.values[:3])))
 
 
+def interpolate_pose(p_from: Pose, p_to: Pose, alpha: float) -> Pose:
+    """The pose a fraction `alpha` of the way from `p_from` to `p_to` (0: p_from, 1: p_to): the position on the
+    line, the orientation on the shortest rotation between the two (outside [0, 1] both go on beyond)."""
+    r0 = Rotation.from_rotvec(p_from.values[3:])
+    turn = (Rotation.from_rotvec(p_to.values[3:]) * r0.inv()).as_rotvec()
+    position = np.add(p_from.values[:3], alpha * np.subtract(p_to.values[:3], p_from.values[:3]))
+    r = Rotation.from_rotvec(alpha * turn) * r0
+    return Pose(tuple(float(v) for v in (*position, *r.as_rotvec())))
+
+
 def show(value) -> str:
     """A value as textmsg writes it."""
     if isinstance(value, bool):
