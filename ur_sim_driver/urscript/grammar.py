@@ -21,6 +21,8 @@ from lark.exceptions import UnexpectedCharacters, UnexpectedInput, UnexpectedTok
 
 from ur_sim_driver.errors import ScriptError
 
+LITERALS = frozenset({'number', 'string', 'true', 'false'})  # the expressions that are their own value
+
 GRAMMAR = r"""
 program: statement*
 
@@ -103,7 +105,7 @@ def parse(source: str) -> Tree:
     """The syntax tree of a URScript program or statements; ScriptError naming the line, the column and what was
     expected where the text is not URScript (the robot refuses such a program, and nothing runs)."""
     try:
-        return _parser().parse(_LABEL.sub('', source))
+        return _prepare(_parser().parse(_LABEL.sub('', source)))
     except UnexpectedToken as exc:
         line, column = exc.line, exc.column
         found = repr(str(exc.token))
@@ -120,6 +122,32 @@ def parse(source: str) -> Tree:
     except UnexpectedInput as exc:  # the other lark errors: end of input
         raise ScriptError(f'syntax error on line {exc.line}, column {exc.column}: {exc}', exc.line,
                           exc.column) from None
+
+
+def _prepare(tree: Tree) -> Tree:
+    """Resolve once what every evaluation would otherwise work out again (the interpreter reads them): a literal's
+    `literal` value, a variable's and a call's `name`, a call's `arguments` and whether all are plain (`plain`), a
+    node's place `at` (line, column)."""
+    for node in tree.iter_subtrees():
+        kind = node.data
+        if kind == 'number':
+            text = str(node.children[0])
+            node.literal = float(text) if any(c in text for c in '.eE') else int(text)
+        elif kind == 'string':
+            node.literal = str(node.children[0])[1:-1]
+        elif kind in ('true', 'false'):
+            node.literal = kind == 'true'
+        elif kind == 'var':
+            node.name = str(node.children[0])
+        elif kind == 'call':
+            node.name = str(node.children[0])
+            node.arguments = [(str(a.children[0]), a.children[1]) if a.data == 'kwarg' else (None, a)
+                              for a in (node.children[1].children if len(node.children) > 1 else [])]
+            # every argument a variable or a literal: the call needs no generator (Interpreter._leaf)
+            node.plain = all(expr.data == 'var' or expr.data in LITERALS for _, expr in node.arguments)
+        if getattr(node.meta, 'line', None) is not None:
+            node.at = (node.meta.line, node.meta.column)
+    return tree
 
 
 _TERMINALS = {'NAME': 'a name', 'NUMBER': 'a number', 'STRING': 'a string',

@@ -16,12 +16,14 @@ from lark import Token, Tree
 
 from ur_sim_driver.errors import ScriptError
 from ur_sim_driver.urscript.builtins import builtins
+from ur_sim_driver.urscript.grammar import LITERALS
 from ur_sim_driver.urscript.operators import arith, bind, compare, copy
 from ur_sim_driver.urscript.threads import Threads
 from ur_sim_driver.urscript.values import Pose, Request, ThreadHandle, is_number, show, truth
 
 # A loop that runs this many times without spending robot time is the controller's "infinite loop" error.
 MAX_ITERATIONS_WITHOUT_TIME = 100_000
+_NOT_LEAF = object()  # _leaf's answer for an expression that needs evaluating
 
 
 class ScriptRobot(Protocol):
@@ -107,12 +109,16 @@ class Interpreter:
     def _statement(self, node: Tree, scope: dict):
         kind = node.data
         thread = self.threads.current
-        thread.line, thread.column = node.meta.line, node.meta.column  # where a request's failure points
+        thread.line, thread.column = node.at  # where a request's failure points
         try:
             if kind == 'assign':
                 yield from self._assign(node, scope)
             elif kind == 'call_stmt':
-                yield from self._eval(node.children[0], scope)
+                result = self._leaf(node.children[0], scope)
+                if result is _NOT_LEAF:
+                    yield from self._eval(node.children[0], scope)
+                elif type(result) is Request:
+                    yield result
             elif kind == 'if_stmt':
                 yield from self._if(node, scope)
             elif kind == 'while_stmt':
@@ -151,7 +157,11 @@ class Interpreter:
         children = list(node.children)
         declared = str(children.pop(0)) if isinstance(children[0], Token) and children[0].type == 'SCOPE' else None
         target, value_node = children
-        value = yield from self._eval(value_node, scope)
+        value = self._leaf(value_node, scope)
+        if value is _NOT_LEAF:
+            value = yield from self._eval(value_node, scope)
+        elif type(value) is Request:  # a built-in spending robot time
+            value = yield value
         name = str(target.children[0])
         into = self.globals if declared == 'global' or (name in self.globals and name not in scope
                                                          and declared != 'local') else scope
@@ -211,22 +221,22 @@ class Interpreter:
     # ---- expressions -------------------------------------------------------------------------------------
     def _eval(self, node, scope: dict):
         kind = node.data
-        if kind == 'number':
-            text = str(node.children[0])
-            return float(text) if any(c in text for c in '.eE') else int(text)
-        if kind == 'true':
-            return True
-        if kind == 'false':
-            return False
-        if kind == 'string':
-            return str(node.children[0])[1:-1]
         if kind == 'var':
-            return self._lookup(str(node.children[0]), scope)
+            return self._lookup(node.name, scope)
+        if kind in LITERALS:
+            return node.literal
+        if kind == 'call':
+            return (yield from self._call(node, scope))
         if kind in ('list_', 'pose'):
             items = [c for c in node.children if isinstance(c, Tree)]
             values = []
             for expr in (items[0].children if items else []):
-                values.append((yield from self._eval(expr, scope)))
+                value = self._leaf(expr, scope)
+                if value is _NOT_LEAF:
+                    value = yield from self._eval(expr, scope)
+                elif type(value) is Request:
+                    value = yield value
+                values.append(value)
             if kind == 'list_':
                 return values
             if len(values) == 1 and self._defined('p', scope):  # p[i] of a variable named p, not a pose literal
@@ -235,12 +245,19 @@ class Interpreter:
                 raise ScriptError(f'a pose has 6 numbers (x, y, z [m], rx, ry, rz [rad]); got {show(values)}')
             return Pose(tuple(float(v) for v in values))
         if kind == 'index':
-            value = yield from self._eval(node.children[0], scope)
+            value = self._leaf(node.children[0], scope)
+            if value is _NOT_LEAF:
+                value = yield from self._eval(node.children[0], scope)
+            elif type(value) is Request:  # a built-in spending robot time
+                value = yield value
             for subscript in node.children[1:]:  # m[i, j]: row i, column j of a matrix (a list of rows)
-                value = self._element(value, (yield from self._eval(subscript, scope)))
+                index = self._leaf(subscript, scope)
+                if index is _NOT_LEAF:
+                    index = yield from self._eval(subscript, scope)
+                elif type(index) is Request:  # a built-in spending robot time
+                    index = yield index
+                value = self._element(value, index)
             return value
-        if kind == 'call':
-            return (yield from self._call(node, scope))
         if kind == 'run_thread':
             return self._run_thread(str(node.children[0]))
         if kind == 'neg':
@@ -256,14 +273,19 @@ class Interpreter:
                 return True
             right = truth((yield from self._eval(node.children[1], scope)))
             return left != right if kind == 'xor_' else right
-        if kind == 'compare':
-            left = yield from self._eval(node.children[0], scope)
-            right = yield from self._eval(node.children[2], scope)
-            return compare(str(node.children[1]), left, right)
-        if kind == 'binop':
-            left = yield from self._eval(node.children[0], scope)
-            right = yield from self._eval(node.children[2], scope)
-            return arith(str(node.children[1]), left, right)
+        if kind == 'compare' or kind == 'binop':
+            left_node, op, right_node = node.children
+            left = self._leaf(left_node, scope)
+            if left is _NOT_LEAF:
+                left = yield from self._eval(left_node, scope)
+            elif type(left) is Request:  # a built-in spending robot time
+                left = yield left
+            right = self._leaf(right_node, scope)
+            if right is _NOT_LEAF:
+                right = yield from self._eval(right_node, scope)
+            elif type(right) is Request:  # a built-in spending robot time
+                right = yield right
+            return (compare if kind == 'compare' else arith)(str(op), left, right)
         if kind == 'factor':  # unary plus
             return (yield from self._eval(node.children[0], scope))
         raise ScriptError(f'{kind} is not supported by ur_sim')
@@ -276,6 +298,25 @@ class Interpreter:
 
     def _defined(self, name: str, scope: dict) -> bool:
         return name in scope or name in self.globals
+
+    def _leaf(self, node: Tree, scope: dict):
+        """Without a generator (most operands need none): a variable's or a literal's value, or a built-in's result
+        whose arguments are such (a Request: the caller yields it); else _NOT_LEAF."""
+        kind = node.data
+        if kind == 'var':
+            return self._lookup(node.name, scope)
+        if kind in LITERALS:
+            return node.literal
+        if kind == 'call' and node.plain and node.name not in self.functions and node.name in self.builtins:
+            positional, keywords = [], {}
+            for keyword, expr in node.arguments:
+                value = self._lookup(expr.name, scope) if expr.data == 'var' else expr.literal
+                if keyword is None:
+                    positional.append(value)
+                else:
+                    keywords[keyword] = value
+            return self._builtin(node.name, positional, keywords)
+        return _NOT_LEAF
 
     def _lookup(self, name: str, scope: dict):
         if name in scope:
@@ -297,24 +338,35 @@ class Interpreter:
         positional, keywords = [], {}
         if len(node.children) > 1:
             for arg in node.children[1].children:
-                if isinstance(arg, Tree) and arg.data == 'kwarg':
-                    keywords[str(arg.children[0])] = yield from self._eval(arg.children[1], scope)
+                keyword = arg.data == 'kwarg'
+                expr = arg.children[1] if keyword else arg
+                value = self._leaf(expr, scope)
+                if value is _NOT_LEAF:
+                    value = yield from self._eval(expr, scope)
+                elif type(value) is Request:  # a built-in spending robot time
+                    value = yield value
+                if keyword:
+                    keywords[str(arg.children[0])] = value
                 else:
-                    positional.append((yield from self._eval(arg, scope)))
+                    positional.append(value)
         if name in self.functions:
             return (yield from self._user_call(self.functions[name], positional, keywords))
         if name == 'interpreter_mode':
             return (yield from self._interpreter_mode(positional, keywords, scope))
+        result = self._builtin(name, positional, keywords)
+        if type(result) is Request:
+            return (yield result)
+        return result
+
+    def _builtin(self, name: str, positional: list, keywords: dict):
+        """A built-in function's result, or the Request for the robot time it spends."""
         if name not in self.builtins:
             raise ScriptError(f'unknown function {name!r}: it is not defined in the program and not among the '
                               'functions ur_sim supports (docs/urscript.md)')
         parameters, function = self.builtins[name]
-        bound = bind(name, parameters, positional, keywords)
-        result = function(*bound)
-        if isinstance(result, Request):
-            if self.secondary:
-                raise ScriptError(f'{name}: a secondary program (sec) cannot spend robot time; use a def program')
-            return (yield result)
+        result = function(*bind(name, parameters, positional, keywords))
+        if type(result) is Request and self.secondary:
+            raise ScriptError(f'{name}: a secondary program (sec) cannot spend robot time; use a def program')
         return result
 
     def _interpreter_mode(self, positional: list, keywords: dict, scope: dict):
@@ -349,10 +401,13 @@ class Interpreter:
 
     def _user_call(self, definition: Tree, positional: list, keywords: dict):
         name = str(definition.children[0])
-        params = [c for c in definition.children[1:] if isinstance(c, Tree) and c.data == 'params']
-        spec = [(str(p.children[0]), p.children[1] if len(p.children) > 1 else None)
-                for p in (params[0].children if params else [])]
-        names = [n for n, _ in spec]
+        signature = getattr(definition, 'signature', None)
+        if signature is None:  # the arguments and their defaults, worked out at the first call
+            params = [c for c in definition.children[1:] if isinstance(c, Tree) and c.data == 'params']
+            spec = [(str(p.children[0]), p.children[1] if len(p.children) > 1 else None)
+                    for p in (params[0].children if params else [])]
+            signature = definition.signature = (spec, [n for n, _ in spec], _block(definition))
+        spec, names, body = signature
         if len(positional) > len(spec):
             raise ScriptError(f'{name}() takes at most {len(spec)} arguments; got {len(positional)}')
         local: dict[str, Any] = dict(zip(names, positional))
@@ -366,7 +421,7 @@ class Interpreter:
                     raise ScriptError(f'{name}() needs argument {param!r} ({", ".join(names)})')
                 local[param] = yield from self._eval(default, self.globals)
         try:
-            yield from self._block(_block(definition), local)
+            yield from self._block(body, local)
         except _Return as ret:
             return ret.value
         return None
