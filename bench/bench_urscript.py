@@ -10,11 +10,17 @@ interpreter's share [ms]; how many times real time the program runs in lockstep 
 """
 from __future__ import annotations
 
+import json
 import platform
+import subprocess
+import sys
+import tempfile
 import time
+from pathlib import Path
 
 import numpy as np
 
+from bench.bench_sim import _SimProcess, period_stats
 from ur_sim_driver.motion.trajectory import TrajectorySample
 from ur_sim_driver.robot.robot_state import RobotState
 from ur_sim_driver.robot.sim_config import SimConfig
@@ -23,6 +29,7 @@ from ur_sim_driver.urscript.runner import ScriptRunner
 
 READY = (0.0, -1.2, 1.2, -1.57, -1.57, 0.0)
 CYCLES = 2000
+ROUNDS = 5  # the fastest round's figures are reported
 PROGRAM = '''def streamer():
   global target = get_actual_joint_positions()
   global servo_running = False
@@ -118,15 +125,47 @@ def _cycles(with_program: bool) -> np.ndarray:
     return took[CYCLES // 10:]  # after the start
 
 
+def realtime_with_ur_rtde(seconds: float = 30.0) -> dict:
+    """/joint_states in real time while ur_rtde's control script runs in ur_sim's interpreter and a ur_rtde client
+    (bench/ur_rtde_servoj.py, a process of its own) streams servoJ to it at 500 Hz: the periods a subscriber of its
+    own process sees (bench/js_recorder.py) over the last `seconds`."""
+    sim = _SimProcess('-p', 'real_time_factor:=1.0')
+    warm_up = 10.0  # [s] ur_sim's start, ur_rtde's connection and script, the move to READY: not counted
+    try:
+        with tempfile.TemporaryDirectory() as tmp:
+            out = Path(tmp) / 'js.txt'
+            recorder = subprocess.Popen([sys.executable, '-m', 'bench.js_recorder', str(out),
+                                         str(seconds + warm_up), '40'])
+            time.sleep(2.0)  # ur_sim's ports open before the client connects
+            client = subprocess.Popen([sys.executable, '-m', 'bench.ur_rtde_servoj', '127.0.0.1',
+                                       str(seconds + warm_up)], stdout=subprocess.PIPE, text=True)
+            try:
+                recorder.wait(timeout=seconds + warm_up + 60.0)
+                answer = client.communicate(timeout=seconds + warm_up + 60.0)[0]
+            finally:
+                client.kill()  # ur_rtde reconnects for ever to a robot that went away
+                recorder.kill()
+            streamed = json.loads(answer.strip().splitlines()[-1])
+            rows = np.loadtxt(out, ndmin=2)
+    finally:
+        sim.stop()
+    return {**period_stats(rows[:, 0], seconds), 'ur_rtde_servoj': streamed,
+            'targets': {'p99_period_ms': 2.5}}
+
+
 def run() -> dict:
-    with_program, held = _cycles(True), _cycles(False)
+    rounds = [(_cycles(True), _cycles(False)) for _ in range(ROUNDS)]
+    # The machine's other work only ever slows a round: the fastest round is the interpreter's own time.
+    with_program, held = min(rounds, key=lambda r: r[0].mean())
     mean, p99 = 1e3 * with_program.mean(), 1e3 * np.percentile(with_program, 99)
-    base = 1e3 * held.mean()
+    base = 1e3 * min(h.mean() for _, h in rounds)
     return {
         'machine': f'{platform.machine()}, {platform.python_version()}',
         'program': 'a main loop dispatching a streamed servo command read from registers + a servo thread',
+        'rounds': ROUNDS,
         'cycle_ms': {'mean': round(mean, 4), 'p99': round(p99, 4)},
         'cycle_without_program_ms': round(base, 4),
         'interpreter_ms': round(mean - base, 4),
         'lockstep_times_real_time_500hz': round(2.0 / mean, 1),
+        'realtime_with_ur_rtde_servoj': realtime_with_ur_rtde(),
     }

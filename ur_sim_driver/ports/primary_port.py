@@ -35,6 +35,7 @@ from ur_sim_driver.controllers.base import Host
 from ur_sim_driver.errors import ScriptError
 from ur_sim_driver.ports import primary_messages as pm
 from ur_sim_driver.ports.realtime_messages import realtime_package
+from ur_sim_driver.ports.rtde_fields import CycleValues
 from ur_sim_driver.ports.tcp_port import TcpPort
 from ur_sim_driver.robot.robot_state import RobotState
 from ur_sim_driver.robot.software import SoftwareVersion, parse_version
@@ -130,10 +131,11 @@ class PrimaryPort:
     """
 
     def __init__(self, address: str, port: int, host: Host, kind: str = PRIMARY, backlog: int = BACKLOG,
-                 log: Callable[[str], None] = lambda _: None) -> None:
+                 log: Callable[[str], None] = lambda _: None, values: CycleValues | None = None) -> None:
         if kind not in (PRIMARY, SECONDARY, REALTIME):
             raise ValueError(f'interface kind {kind!r}: one of {PRIMARY!r}, {SECONDARY!r}, {REALTIME!r}')
         self.host, self.kind, self.backlog, self.log = host, kind, backlog, log
+        self.values = values if values is not None else CycleValues(host)  # the real-time package's
         self.what = f'{kind} interface'
         self.version = software_version(host)
         params = host.sim.params
@@ -169,7 +171,7 @@ class PrimaryPort:
             clients = self._clients
             if clients:
                 with self.host.lock:
-                    package = realtime_package(self.host, self.version)
+                    package = realtime_package(self.values, self.version)
                 for client in clients:
                     client.queue(package)
             return

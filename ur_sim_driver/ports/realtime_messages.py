@@ -10,8 +10,7 @@ from __future__ import annotations
 
 import struct
 
-from ur_sim_driver.controllers.base import Host
-from ur_sim_driver.ports.rtde_fields import READERS
+from ur_sim_driver.ports.rtde_fields import CycleValues
 from ur_sim_driver.robot.software import SoftwareVersion
 
 # The layout in order: an RTDE variable (its value), or a number of reserved doubles (0.0).
@@ -40,19 +39,20 @@ def package_size(version: SoftwareVersion) -> int:
     return next((size for since, size in steps if v >= since), 1044)
 
 
-def _doubles(host: Host) -> list[float]:
-    values: list[float] = []
+def _doubles(values: CycleValues) -> list[float]:
+    out: list[float] = []
     for item in LAYOUT:
         if isinstance(item, int):
-            values.extend([0.0] * item)
+            out.extend([0.0] * item)
             continue
-        value = READERS[item](host)
-        values.extend(float(x) for x in value) if isinstance(value, tuple) else values.append(float(value))
-    return values
+        value = values[item]
+        out.extend(float(x) for x in value) if isinstance(value, tuple) else out.append(float(value))
+    return out
 
 
-def realtime_package(host: Host, version: SoftwareVersion) -> bytes:
-    """The package of the robot now, in the layout of `version` (call under the simulation lock)."""
+def realtime_package(values: CycleValues, version: SoftwareVersion) -> bytes:
+    """The package of the robot after the cycle just run (`values`), in the layout of `version` (call under the
+    simulation lock)."""
     size = package_size(version)
     n = (size - 4) // 8
-    return struct.pack(f'>i{n}d', size, *_doubles(host)[:n])
+    return struct.pack(f'>i{n}d', size, *_doubles(values)[:n])

@@ -27,7 +27,7 @@ from dataclasses import dataclass
 
 from ur_sim_driver.controllers.base import Host
 from ur_sim_driver.ports import rtde_protocol as rp
-from ur_sim_driver.ports.rtde_fields import READERS, WRITABLE, write
+from ur_sim_driver.ports.rtde_fields import READERS, WRITABLE, CycleValues, write
 from ur_sim_driver.ports.tcp_port import TcpPort
 
 BACKLOG = 1000  # packages queued per connection
@@ -58,11 +58,13 @@ class RtdePort:
     Args:
         rate: the robot's control rate [Hz] (the highest output frequency).
         log: called with a line for the log (client text messages, refused inputs).
+        values: the cycle's output variables, shared with the other ports that stream them (else its own).
     """
 
     def __init__(self, address: str, port: int, host: Host, rate: float,
-                 log: Callable[[str], None] = lambda _: None) -> None:
+                 log: Callable[[str], None] = lambda _: None, values: CycleValues | None = None) -> None:
         self.host, self.rate, self.log = host, rate, log
+        self.values = values if values is not None else CycleValues(host)
         self._claims: dict[str, object] = {}  # input variable -> the session whose recipe holds it
         self._claims_lock = threading.Lock()
         self._sessions: list[_Session] = []  # started ones (replaced, never changed: the loop reads it unlocked)
@@ -80,13 +82,12 @@ class RtdePort:
         if not sessions:
             return
         self._cycle += 1
-        cycle, host = self._cycle, self.host
-        with host.lock:
+        cycle, values = self._cycle, self.values
+        with self.host.lock:
             for session in sessions:
                 due = [r for r in session.outputs if cycle % r.every == 0]
                 if due:
-                    session.queue(b''.join(session.data_package(r, [READERS[n](host) for n in r.names])
-                                           for r in due))
+                    session.queue(b''.join(session.data_package(r, [values[n] for n in r.names]) for r in due))
 
     @property
     def cycle(self) -> int:

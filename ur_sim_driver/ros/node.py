@@ -51,6 +51,7 @@ from ur_sim_driver.physics.physics import ArmState
 from ur_sim_driver.ports.dashboard_port import DashboardPort
 from ur_sim_driver.ports.interpreter_port import InterpreterPort, has_interpreter_socket
 from ur_sim_driver.ports.primary_port import REALTIME, SECONDARY, PrimaryPort
+from ur_sim_driver.ports.rtde_fields import CycleValues
 from ur_sim_driver.ports.rtde_port import RtdePort
 from ur_sim_driver.ports.script_sockets import ScriptSockets
 from ur_sim_driver.ports.tcp_port import PortError, close_all
@@ -188,18 +189,20 @@ class UrSimNode(Node):
 
         self._init_messages()
         cfg = self.cfg
+        values = CycleValues(self.host)  # the output variables RTDE and the real-time interface stream, read once
         self.dashboard_port = self._open_port('dashboard server', 'dashboard_server.port', lambda: DashboardPort(
             cfg.dashboard_server_host, cfg.dashboard_server_port, self.host.dashboard, self._lock,
             self.get_logger().info))
         self.rtde_port = self._open_port('RTDE', 'rtde.port', lambda: RtdePort(
-            cfg.rtde_host, cfg.rtde_port, self.host, self.sim.control_rate, self.get_logger().info))
+            cfg.rtde_host, cfg.rtde_port, self.host, self.sim.control_rate, self.get_logger().info, values))
         self.primary_ports = [port for port in (
             self._open_port('primary interface', 'primary.port', lambda: PrimaryPort(
                 cfg.primary_host, cfg.primary_port, self.host, log=self.get_logger().info)),
             self._open_port('secondary interface', 'secondary.port', lambda: PrimaryPort(
                 cfg.secondary_host, cfg.secondary_port, self.host, SECONDARY, log=self.get_logger().info)),
             self._open_port('real-time interface', 'realtime.port', lambda: PrimaryPort(
-                cfg.realtime_host, cfg.realtime_port, self.host, REALTIME, log=self.get_logger().info)))
+                cfg.realtime_host, cfg.realtime_port, self.host, REALTIME, log=self.get_logger().info,
+                values=values)))
             if port is not None]
         # PolyScope 5.10+ on an e-Series only, as the robot
         self.interpreter_port = self._open_port('interpreter socket', 'interpreter.port', lambda: InterpreterPort(
