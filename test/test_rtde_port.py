@@ -199,11 +199,32 @@ def test_joint_modes_elbow_and_raw_wrench_are_filled_and_what_is_not_simulated_i
         client.close()
 
 
+def test_every_output_variable_is_served_with_its_type(h):
+    """The whole output table in one recipe, as the Client Library's exhaustive test recipe asks for it."""
+    names = list(rp.OUTPUTS)
+    client = _connect(h)
+    try:
+        recipe, types = client.outputs(500.0, names)
+        assert recipe == 1 and types == [rp.OUTPUTS[n] for n in names]
+        assert client.request(ord('S')) == b'\x01'
+        _cycles(h, 2)
+        first = dict(zip(names, _unpack(types, client.data()[1])))
+        second = dict(zip(names, _unpack(types, client.data()[1])))
+    finally:
+        client.close()
+    assert second['control_step'] == first['control_step'] + 1
+    assert second['timestamp'] == pytest.approx(second['control_step'] * 0.002)
+    assert first['tool_mode'] == 253 and first['tool_temperature'] == 32.0 and first['tool_output_current'] == 0.0
+    assert np.allclose(first['target_gravity'], [0.0, 0.0, 9.81], atol=0.01)  # the anti-gravity: up
+    assert first['tcp_force_scalar'] == pytest.approx(np.linalg.norm(first['actual_TCP_force'][:3]))
+    assert first['euromap67_input_bits'] == 0 and np.isnan(first['actual_TCP_acceleration']).all()
+
+
 def test_unknown_names_answer_not_found_and_a_held_input_in_use(h):
     first, second = _connect(h), _connect(h)
     try:
         recipe, types = first.outputs(500.0, ['actual_q', 'no_such_variable', 'euromap67_input_bits'])
-        assert recipe == 0 and types == ['VECTOR6D', 'NOT_FOUND', 'NOT_FOUND']  # a Euromap67 interface is not
+        assert recipe == 0 and types == ['VECTOR6D', 'NOT_FOUND', 'UINT32']  # a name the robot knows is typed
         recipe, types = first.outputs(1000.0, ['actual_q'])  # above the robot's 500 Hz
         assert recipe == 0
         assert first.inputs(['input_int_register_24'])[0] == 1

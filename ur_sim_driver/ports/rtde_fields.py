@@ -22,6 +22,7 @@ import mujoco
 import numpy as np
 
 from ur_sim_driver.controllers.base import Host
+from ur_sim_driver.controllers.io_and_status import TOOL_TEMPERATURE
 from ur_sim_driver.robot.encoders import reported_velocity
 from ur_sim_driver.robot.io_bank import CURRENT, N_ANALOG, VOLTAGE, analog_out_refusal
 from ur_sim_driver.robot.registers import bits_word, set_bits_word
@@ -159,6 +160,31 @@ READERS: dict[str, Callable[[Host], object]] = {
     **{name: (lambda h: NAN) for name in ('actual_execution_time', 'actual_momentum', 'actual_main_voltage',
                                            'actual_robot_voltage', 'actual_robot_current')},
     'actual_tool_accelerometer': lambda h: (NAN,) * 3,
+    # What the Client Library asks for (its exhaustive test recipe): served, as by the robot, whether or not
+    # ur_sim simulates it. The tool's current and temperature are the ROS tool_data's (io_and_status.py); currents,
+    # energies, deviation and collision ratios, accelerations are not simulated (NaN); no Euromap67 interface or
+    # encoder is installed (0); the base does not move.
+    'tool_mode': lambda h: joint_mode(h.robot.robot_mode),
+    'tool_output_current': lambda h: 0.0, 'tool_temperature': lambda h: TOOL_TEMPERATURE,
+    **{name: (lambda h: 0) for name in ('tool_output_mode', 'tool_digital_output0_mode', 'tool_digital_output1_mode',
+                                        'encoder0_raw', 'encoder1_raw', 'euromap67_input_bits',
+                                        'euromap67_output_bits', 'time_scale_source')},
+    'actual_configurable_digital_input_bits': lambda h: _bits(h.sim.io.digital_in[8:16]),
+    'actual_configurable_digital_output_bits': lambda h: _bits(h.sim.io.digital_out[8:16]),
+    'target_execution_time': lambda h: h.sim.control_dt,
+    'tcp_force_scalar': lambda h: float(np.linalg.norm(h.sim.tcp_force()[:3])),
+    # as set_gravity takes it: the direction opposite to gravity, up for an upright robot [m/s^2]
+    'target_gravity': lambda h: _vec(h.sim.gravity_belief if h.sim.gravity_belief is not None
+                                     else -h.sim.physics.gravity_in_base()),
+    'control_step': lambda h: round(h.sim.time / h.sim.control_dt),
+    'target_base_acceleration': lambda h: (0.0,) * 6,
+    **{name: (lambda h: NAN6) for name in ('actual_current_window', 'actual_TCP_acceleration',
+                                            'target_TCP_acceleration', 'wrench_calc_from_currents',
+                                            'target_base_wrench')},
+    **{name: (lambda h: NAN) for name in ('io_current', 'actual_robot_energy_consumed',
+                                           'actual_robot_braking_energy_dissipated', 'euromap67_24V_voltage',
+                                           'euromap67_24V_current', 'joint_position_deviation_ratio',
+                                           'collision_detection_ratio')},
     **_register_readers(),
 }
 
