@@ -4,8 +4,10 @@ the order the threads were started, until it spends robot time (a motion, ``slee
 ``join``) or ends. A thread started in a cycle runs in that cycle, after the others.
 
 ``enter_critical`` keeps the other threads from running until the same thread's ``exit_critical`` (nested
-sections count), even across cycles where it spends time in between, as ur_rtde's control script does with
-``stopl`` inside a section. ``kill`` ends a thread and the threads it started; its motion, if it commanded the
+sections count) while it runs; when it spends robot time inside the section (a motion, a blocking read), the others
+run meanwhile, and it takes the section back when it goes on. The Client
+Library's External Control program relies on it: its main thread waits for the next command in a blocking socket
+read inside a section, while its servo thread commands the arm every cycle. ``kill`` ends a thread and the threads it started; its motion, if it commanded the
 last one, goes on until another replaces it (a stop, say), as ur_rtde's ``speedStop`` relies on. A thread may
 ``join`` only a thread it started. When the main program ends, or a thread calls ``halt``, the program ends and
 every thread with it.
@@ -154,6 +156,8 @@ class Threads:
     def _advance(self, thread: ScriptThread, handle: Handler) -> None:
         while thread.runnable() and (self.critical is None or self.critical is thread) and not self.halted:
             self.current = thread
+            if thread.critical:  # it goes on inside its section: the section is its again
+                self.critical = thread
             try:
                 request = thread.body.send(thread.reply)
             except StopIteration:
@@ -177,6 +181,8 @@ class Threads:
                     thread.until = handle(thread, request)
             finally:
                 self.current = None
+            if self.critical is thread:  # it spends robot time: the others run meanwhile
+                self.critical = None
 
     def _end(self, thread: ScriptThread) -> None:
         thread.done = True
