@@ -294,6 +294,40 @@ def test_an_external_force_torque_sensor_feeds_the_robots_reading_once_a_program
         wait_for(lambda: h.sim.sim.external_ft is None, what='the external sensor disabled')
 
 
+def test_a_refused_input_leaves_the_data_stream_alone_and_the_slider_takes_zero(h):
+    """The Client Library's RTDE example sweeps the slider from 0 to 1 while it reads data packages only (any
+    other package is a failure to it): 0 is taken, 1.5 refused in ur_sim's log, and only data packages come."""
+    client = _connect(h)
+
+    def slider(fraction: float) -> None:
+        payload = struct.pack('>BId', recipe, 1, fraction)
+        client.sock.sendall(struct.pack('>HB', 3 + len(payload), ord('U')) + payload)
+
+    def applied(fraction: float):
+        return lambda: h.sim.host.speed_scaling.slider == fraction
+    try:
+        recipe, _ = client.inputs(['speed_slider_mask', 'speed_slider_fraction'])
+        _, out_types = client.outputs(500.0, ['timestamp'])
+        assert client.request(ord('S')) == b'\x01'
+        slider(0.0)
+        wait_for(applied(0.0), what='the slider at 0')
+        slider(1.5)  # refused
+        slider(0.5)  # taken after it, on the same connection: once it shows, the refusal has been handled
+        wait_for(applied(0.5), what='the slider at 0.5')
+        with h.sim.host.lock:
+            now = h.sim.sim.time
+        while True:  # every package queued up to now: data packages only
+            kind, payload = client.receive()
+            assert kind == ord('U'), bytes(payload)
+            (stamp,) = _unpack(out_types, payload[1:])
+            if stamp >= now - 1e-9:
+                break
+    finally:
+        slider(1.0)
+        wait_for(applied(1.0), what='the slider back at 1')
+        client.close()
+
+
 def test_a_ur_rtde_program_reads_the_robot_and_sets_an_output():
     """ur_rtde (PyPI ur-rtde), as its users run it, against ur_sim's RTDE on 30004: on a loopback address of this
     test process's own (ur_rtde has no port argument; ROS_DOMAIN_ID is unique per process), paced to the wall clock

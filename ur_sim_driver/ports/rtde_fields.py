@@ -34,7 +34,7 @@ from ur_sim_driver.robot.robot_state import (
     ROBOT_EMERGENCY_STOP,
     SYSTEM_EMERGENCY_STOP,
 )
-from ur_sim_driver.robot.speed_scaling import SLIDER_MAX, SLIDER_MIN
+from ur_sim_driver.robot.speed_scaling import SLIDER_MAX
 
 NAN = float('nan')  # a value ur_sim does not simulate
 NAN6 = (NAN,) * 6
@@ -225,10 +225,10 @@ def write(host: Host, values: dict[str, object]) -> list[str]:
     host.sim.io = io
     if int(values.get('speed_slider_mask', 0)) & 1 and 'speed_slider_fraction' in values:
         f = float(values['speed_slider_fraction'])
-        if SLIDER_MIN <= f <= SLIDER_MAX:
+        if 0.0 <= f <= SLIDER_MAX:  # RTDE takes the whole slider, 0 included (the driver's service: from 0.01)
             host.speed_scaling.slider = f
         else:
-            refused.append(f'speed_slider_fraction = {f} is outside [{SLIDER_MIN}, {SLIDER_MAX}]')
+            refused.append(f'speed_slider_fraction = {f} is outside [0, {SLIDER_MAX}]')
     if 'external_force_torque' in values:  # read while ft_rtde_input_enable has enabled the external sensor
         reading = np.array(values['external_force_torque'], dtype=float)
         if np.all(np.isfinite(reading)):

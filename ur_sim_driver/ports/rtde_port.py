@@ -264,9 +264,8 @@ class _Session:
         values = dict(zip(recipe.names, rp.regroup(flat, recipe.types)))
         with self.port.host.lock:
             refused = write(self.port.host, values)
-        for line in refused:
+        for line in refused:  # to ur_sim's log only: a client reading data packages takes any other as a failure
             self.port.log(f'RTDE input refused: {line}')
-            self._send(rp.text_message(line, level=2))
 
     # ---- sending -----------------------------------------------------------------------------
     def data_package(self, recipe: OutputRecipe, values: list) -> bytes:

@@ -5,10 +5,10 @@ the order the threads were started, until it spends robot time (a motion, ``slee
 
 ``enter_critical`` keeps the other threads from running until the same thread's ``exit_critical`` (nested
 sections count) while it runs; when it spends robot time inside the section (a motion, a blocking read), the others
-run meanwhile, and it takes the section back when it goes on. The Client
-Library's External Control program relies on it: its main thread waits for the next command in a blocking socket
-read inside a section, while its servo thread commands the arm every cycle. ``kill`` ends a thread and the threads it started; its motion, if it commanded the
-last one, goes on until another replaces it (a stop, say), as ur_rtde's ``speedStop`` relies on. A thread may
+run meanwhile, and it takes the section back when it goes on. The Client Library's External Control program relies
+on it: its main thread waits for the next command in a blocking socket read inside a section, while its servo
+thread commands the arm every cycle. ``kill`` ends a thread and the threads it started; its motion, if it commanded
+the last one, goes on until another replaces it (a stop, say), as ur_rtde's ``speedStop`` relies on. A thread may
 ``join`` only a thread it started. When the main program ends, or a thread calls ``halt``, the program ends and
 every thread with it.
 
