@@ -301,7 +301,8 @@ class Interpreter:
 
     def _leaf(self, node: Tree, scope: dict):
         """Without a generator (most operands need none): a variable's or a literal's value, or a built-in's result
-        whose arguments are such (a Request: the caller yields it); else _NOT_LEAF."""
+        whose arguments are such (a Request: the caller yields it); else _NOT_LEAF. Its callers repeat the four
+        lines that use it: a helper generator would cost the generator this avoids."""
         kind = node.data
         if kind == 'var':
             return self._lookup(node.name, scope)
