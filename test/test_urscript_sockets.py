@@ -149,3 +149,26 @@ def test_the_sockets_of_a_program_close_when_it_ends(server):
     box.runner._sockets = make  # to look at them after the program
     box.run(f'def prog():\n  socket_open("127.0.0.1", {server.port}, "kept")\nend')
     assert not sockets[0].is_open('kept')
+
+
+def test_a_loop_reading_a_socket_its_peer_closed_is_an_infinite_loop_not_a_hung_cycle(server):
+    """The failed read answers at once and spends no robot time, so a thread that reads in a loop without sync
+    never gives the cycle back: the controller's infinite loop error, as for any such loop (the Client Library's
+    script command thread does so once the driver is gone)."""
+    box = Box(before_step=server.poll)
+    box.runner.submit(f'''def prog():
+  socket_open("127.0.0.1", {server.port}, "c")
+  sync()
+  while True:
+    data = socket_read_binary_integer(1, "c", 0)
+  end
+end''')
+    for _ in range(10):
+        box.step()
+    assert server.peer is not None and box.runner.current is not None  # it waits for data, a cycle at a time
+    server.peer.close()
+    server.peer = None
+    box.step()  # one cycle, and its end: the program stops with the error
+    (error,) = box.errors()
+    assert 'infinite loop detected' in error.text and error.line == 4  # the while
+    assert box.runner.current is None

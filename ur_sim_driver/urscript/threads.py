@@ -166,7 +166,6 @@ class Threads:
             finally:
                 self.current = None
             thread.reply = None
-            thread.spinning = 0  # it spends robot time: its loops count again
             self.current = thread  # the handler's errors point at its line
             try:
                 if request.kind == 'sleep':
@@ -181,7 +180,10 @@ class Threads:
                     thread.until = handle(thread, request)
             finally:
                 self.current = None
-            if self.critical is thread:  # it spends robot time: the others run meanwhile
+            if thread.runnable():  # answered at once (a read of a closed socket): no robot time spent
+                continue
+            thread.spinning = 0  # it spends robot time: its loops count again
+            if self.critical is thread:  # the others run meanwhile
                 self.critical = None
 
     def _end(self, thread: ScriptThread) -> None:
