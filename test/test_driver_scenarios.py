@@ -66,7 +66,8 @@ def test_one_rad_in_half_a_second_succeeds_slowed_by_the_robot(robot):
     assert min(rec.speed_scaling) < 50.0
     # Never above a joint limit, whatever the reference asked.
     assert (np.abs(qd) <= 1.01 * h.params.v_max).all()
-    assert (np.abs(effort) <= h.params.effort_max + 1e-9).all()
+    # Efforts are motor currents [A]: within the drives' range, the torque limits over the torque constants.
+    assert (np.abs(effort) <= h.params.effort_max / h.params.torque_constant + 1e-9).all()
     # No overshoot past the final point (every joint ends moving down to -1 rad).
     assert (q[t > t[-1] - 1.0] >= -1.0 - 2e-3).all()
     assert np.abs(q[-1] + 1.0).max() < 2e-3

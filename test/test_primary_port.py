@@ -20,6 +20,7 @@ from sim_harness import running_sim, wait_for, wait_still
 
 from ur_sim_driver.ports import primary_messages as pm
 from ur_sim_driver.ports.primary_port import MAX_SCRIPT, PrimaryPort
+from ur_sim_driver.robot.motor_currents import motor_currents
 from ur_sim_driver.robot.robot_state import POWER_OFF, POWER_ON, RUNNING, STOPPED
 from ur_sim_driver.robot.software import SoftwareVersion
 
@@ -225,7 +226,10 @@ def test_joint_cartesian_and_tool_data_are_the_robots(h, client):
     joints = [state[JOINT].take('3d4fB') for _ in range(6)]  # per joint, interleaved
     assert state[JOINT].rest() == b''
     assert np.allclose([j[0] for j in joints], h.q, atol=1e-4) and np.allclose([j[1] for j in joints], h.q, atol=1e-3)
-    assert all(np.isnan(j[3:6]).all() and j[6] == 0.0 and j[7] == 253 for j in joints)  # not simulated; RUNNING
+    with h.sim.host.lock:  # the arm holds still: as RTDE's actual_current
+        currents = motor_currents(h.sim.sim)
+    assert np.allclose([j[3] for j in joints], currents, rtol=1e-5, atol=1e-4)
+    assert all(np.isnan(j[4:6]).all() and j[6] == 0.0 and j[7] == 253 for j in joints)  # not simulated; RUNNING
     pose = state[CARTESIAN].take('6d')
     assert state[CARTESIAN].take('6d') == (0.0,) * 6 and state[CARTESIAN].rest() == b''  # no TCP offset
     with h.sim.host.lock:

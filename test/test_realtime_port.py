@@ -13,6 +13,7 @@ from sim_harness import running_sim, wait_for, wait_still
 
 from ur_sim_driver.ports.primary_port import REALTIME
 from ur_sim_driver.ports.realtime_messages import LAYOUT, package_size
+from ur_sim_driver.robot.motor_currents import motor_currents
 from ur_sim_driver.robot.software import SoftwareVersion
 
 pytestmark = pytest.mark.timeout(120)
@@ -91,9 +92,11 @@ def test_a_package_every_control_cycle_with_the_robots_values(h):
         assert np.allclose(reader.field(values, 'actual_q'), h.q, atol=1e-4)  # the arm holds still
         assert reader.field(values, 'robot_mode')[0] == 7 and list(reader.field(values, 'joint_mode')) == [253] * 6
         assert reader.field(values, 'safety_mode')[0] == 1 and reader.field(values, 'speed_scaling')[0] == 1.0
-        assert np.isnan(reader.field(values, 'actual_current')).all()  # not simulated
         with h.sim.host.lock:
             position, _ = h.sim.sim.tcp_pose()
+            currents = motor_currents(h.sim.sim)  # the arm holds still: the currents of gravity
+        assert np.allclose(reader.field(values, 'actual_current'), currents, rtol=1e-6, atol=1e-6)
+        assert np.allclose(reader.field(values, 'target_current'), currents, rtol=1e-6, atol=1e-6)
         assert np.allclose(reader.field(values, 'actual_TCP_pose')[:3], position, atol=1e-4)
     finally:
         reader.sock.close()

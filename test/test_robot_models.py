@@ -91,7 +91,7 @@ def test_a_mismatch_stops_the_start_as_ros2_control_node_does_unless_left_unconf
     assert 'Failed to set the initial state of the component : ur20 to active' in str(info.value)
     startup.check_start(dataclasses.replace(cfg, hardware_components_initial_state='unconfigured'))
     startup.check_start(dataclasses.replace(cfg, verify_robot_model=False))
-    assert startup.model_refusal(dataclasses.replace(cfg, verify_robot_model=False)) is None
+    assert startup.configure_refusal(dataclasses.replace(cfg, verify_robot_model=False)) is None
 
 
 @pytest.mark.timeout(120)

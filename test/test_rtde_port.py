@@ -20,6 +20,7 @@ from sim_harness import point, running_sim, wait_for, wait_still
 from ur_glue_planner.motion.kinematics import Kinematics
 from ur_sim_driver.ports import rtde_protocol as rp
 from ur_sim_driver.ports.rtde_port import BACKLOG
+from ur_sim_driver.robot.motor_currents import motor_currents
 
 TIMEOUT = 10.0  # [s] of wall time for an answer
 
@@ -176,7 +177,7 @@ def test_the_target_tcp_is_where_the_setpoint_puts_it(h):
     assert moving >= 5
 
 
-def test_joint_modes_elbow_and_raw_wrench_are_filled_and_what_is_not_simulated_is_nan(h):
+def test_joint_modes_elbow_raw_wrench_and_currents_are_filled_and_what_is_not_simulated_is_nan(h):
     client = _connect(h)
     try:
         names = ['joint_mode', 'elbow_position', 'elbow_velocity', 'ft_raw_wrench', 'actual_current',
@@ -194,7 +195,10 @@ def test_joint_modes_elbow_and_raw_wrench_are_filled_and_what_is_not_simulated_i
         assert np.allclose(elbow, expected, atol=1e-3) and np.linalg.norm(elbow) > 0.3  # the arm holds still
         assert np.allclose(elbow_v, 0.0, atol=1e-3)
         assert np.isfinite(raw).all()
-        assert np.isnan(current).all() and np.isnan(voltage) and np.isnan(accelerometer).all()
+        with h.sim.host.lock:
+            expected_current = motor_currents(h.sim.sim)  # the arm holds still: the currents of gravity
+        assert np.allclose(current, expected_current, atol=1e-3)  # the cycle before: the arm settles still
+        assert np.isnan(voltage) and np.isnan(accelerometer).all()
     finally:
         client.close()
 

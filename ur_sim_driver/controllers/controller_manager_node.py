@@ -83,7 +83,7 @@ class ControllerManagerNode:
             _union(ur_hardware.command_interfaces(joints, cfg.tf_prefix), *(s.command_interfaces for s in specs)),
             _union(ur_hardware.state_interfaces(joints, cfg.tf_prefix), *(s.state_interfaces for s in specs)),
             hwc.IDS[cfg.hardware_components_initial_state],
-            check=lambda _name, step: startup.model_refusal(cfg) if step == hwc.CONFIGURE else None)
+            check=lambda _name, step: startup.configure_refusal(cfg) if step == hwc.CONFIGURE else None)
         self.manager = ControllerManager(
             specs, [c.name for c in components if c.initially_active],
             lambda start, stop, running: ur_hardware.prepare_command_mode_switch(start, stop, running, cfg.tf_prefix,

@@ -11,7 +11,7 @@ from __future__ import annotations
 from collections.abc import Iterable
 
 from ur_sim_driver.controllers.base import Component
-from ur_sim_driver.controllers.ur_hardware import EFFORT_TOO_OLD, robot_model_refusal
+from ur_sim_driver.controllers.ur_hardware import EFFORT_TOO_OLD, robot_model_refusal, torque_efforts_refusal
 from ur_sim_driver.errors import ConfigError
 from ur_sim_driver.robot.sim_config import SimConfig
 from ur_sim_driver.robot.software import TORQUE_CONTROL, supports
@@ -50,28 +50,38 @@ def initial_joint_controller(cfg: SimConfig) -> str | None:
     return name
 
 
-def model_refusal(cfg: SimConfig) -> str | None:
-    """The hardware component's refusal to configure: the robot is not the configured type (with
-    ``verify_robot_model``), or None."""
-    if not cfg.verify_robot_model:
-        return None
-    return robot_model_refusal(cfg.ur_type, cfg.simulated_ur_type, cfg.software_version)
+def configure_refusal(cfg: SimConfig) -> str | None:
+    """The hardware component's refusal to configure, as its ``on_configure``: the robot is not the configured type
+    (with ``verify_robot_model``), or it has no torques to report as efforts (``use_currents_as_efforts`` false on
+    a software older than 5.23.0 / 10.11.0); None when it configures."""
+    if cfg.verify_robot_model:
+        reason = robot_model_refusal(cfg.ur_type, cfg.simulated_ur_type, cfg.software_version)
+        if reason is not None:
+            return reason
+    return None if cfg.use_currents_as_efforts else torque_efforts_refusal(cfg.software_version)
 
 
 def check_start(cfg: SimConfig) -> None:
     """Raise as ros2_control_node ends at start when its hardware component cannot reach its initial state
     (``hardware_components_initial_state.shutdown_on_initial_state_failure`` is true by default): configuring it
-    fails on a robot model mismatch. A component left unconfigured starts, and refuses later.
+    fails (:func:`configure_refusal`). A component left unconfigured starts, and refuses later.
 
     Raises:
-        ConfigError: the driver's message, then the controller manager's.
+        ConfigError: the driver's message, then the controller manager's, and the parameters behind it.
     """
     state = cfg.hardware_components_initial_state
-    reason = model_refusal(cfg) if state != 'unconfigured' else None
-    if reason is not None:
-        raise ConfigError(f'{reason} Failed to set the initial state of the component : {cfg.ur_type} to {state} '
-                          f"(parameters 'ur_type' = {cfg.ur_type!r}, 'simulated_ur_type' = {cfg.simulated_ur_type!r}; "
-                          "'verify_robot_model' = false runs them anyway)")
+    reason = configure_refusal(cfg) if state != 'unconfigured' else None
+    if reason is None:
+        return
+    if cfg.use_currents_as_efforts or torque_efforts_refusal(cfg.software_version) is None:
+        cause = (f"parameters 'ur_type' = {cfg.ur_type!r}, 'simulated_ur_type' = {cfg.simulated_ur_type!r}; "
+                 "'verify_robot_model' = false runs them anyway")
+    else:
+        cause = (f"parameters 'use_currents_as_efforts' = false, 'software_version' = "
+                 f"'{cfg.software_version}'; valid choices: use_currents_as_efforts true, or a software_version of "
+                 '5.23.0 / 10.11.0 or newer')
+    raise ConfigError(f'{reason} Failed to set the initial state of the component : {cfg.ur_type} to {state} '
+                      f'({cause})')
 
 
 # The controller_stopper's "consistent_controllers" (the launch file's list): these keep running while the robot

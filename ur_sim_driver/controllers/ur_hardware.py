@@ -15,7 +15,7 @@ from __future__ import annotations
 from collections.abc import Iterable
 
 from ur_sim_driver.description.params import load_ur_params
-from ur_sim_driver.robot.software import TORQUE_CONTROL, SoftwareVersion, supports
+from ur_sim_driver.robot.software import CURRENT_AS_TORQUE, TORQUE_CONTROL, SoftwareVersion, supports
 
 POSITION, VELOCITY, EFFORT = 'position', 'velocity', 'effort'
 FORCE_MODE, PASSTHROUGH, FREEDRIVE, TOOL_CONTACT = 'force_mode', 'trajectory_passthrough', 'freedrive_mode', \
@@ -141,3 +141,13 @@ def robot_model_refusal(ur_type: str, robot_type: str, version: SoftwareVersion)
     return (f"The connected robot is of type '{robot.model}' and version {version} but the driver was configured for "
             f"type '{ur_type}'. Please check the 'ur_type' parameter and make sure it matches your actual robot. "
             'This can lead to critical inaccuracies of tcp positions.')
+
+
+def torque_efforts_refusal(version: SoftwareVersion) -> str | None:
+    """The hardware's refusal to configure with ``use_currents_as_efforts: false`` on a robot whose software has
+    no ``actual_current_as_torque`` (before 5.23.0 / 10.11.0, and every CB3), in the driver's words; None where it
+    has it."""
+    if supports(version, CURRENT_AS_TORQUE):
+        return None
+    return ('Driver configured to use actual torques as efforts, which is not supported by this software version '
+            f'{version}. Please use version 5.23.0 / 10.11.0 or newer for this feature.')

@@ -137,6 +137,8 @@ class URParams:
         damping: viscous joint friction (6,) [N m s/rad] (simulation estimate).
         coulomb: Coulomb joint friction (6,) [N m] (simulation estimate; felt only under torque control, where
             the robot's friction compensation leaves part of it, see ``Simulator.advance_torque``).
+        torque_constant: (6,) [N m/A] each joint's torque at its output per ampere of motor current, gear included:
+            how the reported motor currents follow from the simulated drive torques (``robot/motor_currents.py``).
         shoulder_offset, elbow_offset: lateral offsets of the arm tubes [m] (collision shapes).
         collision_radius: read-only map part -> radius [m] for base, shoulder, upper_arm,
             elbow, forearm, wrist.
@@ -166,6 +168,7 @@ class URParams:
     armature: np.ndarray
     damping: np.ndarray
     coulomb: np.ndarray
+    torque_constant: np.ndarray
     shoulder_offset: float
     elbow_offset: float
     collision_radius: Mapping[str, float] = field(default_factory=dict)
@@ -262,6 +265,8 @@ def _load(key: str) -> URParams:
             armature=_frozen(_get(sim, 'armature', w), (6,), f'{w}: simulation.armature'),
             damping=_frozen(_get(sim, 'damping', w), (6,), f'{w}: simulation.damping'),
             coulomb=_frozen(_get(sim, 'coulomb', w), (6,), f'{w}: simulation.coulomb'),
+            torque_constant=_frozen(_get(_get(raw, 'drives', w), 'torque_constant', f'{w}: drives'), (6,),
+                                    f'{w}: drives.torque_constant'),
             shoulder_offset=float(_get(off, 'shoulder', w)),
             elbow_offset=float(_get(off, 'elbow', w)),
             collision_radius=MappingProxyType(
@@ -271,6 +276,7 @@ def _load(key: str) -> URParams:
         raise ConfigError(f'{w}: malformed number: {exc}') from exc
     positive = {'mass': params.masses, 'limits.position_deg': params.q_max, 'limits.velocity_deg_s': params.v_max,
                 'limits.effort': params.effort_max, 'limits.acceleration': params.a_max,
+                'drives.torque_constant': params.torque_constant,
                 'control_rate': params.control_rate, 'payload': params.payload, 'reach': params.reach,
                 'collision_radius': list(params.collision_radius.values())}
     for what, values in positive.items():

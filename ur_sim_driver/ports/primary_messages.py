@@ -2,7 +2,7 @@
 Robots Client Library parses (``primary_parser.h``, ``src/primary/robot_state/*.cpp`` and
 ``src/primary/robot_message/*.cpp``), and JointData, CartesianInfo and ToolData, which it skips but other clients
 read, in the layout of a URSim capture in that library's tests (the same on 3.10-3.15 and 5.x). Big-endian
-throughout. What is not simulated (currents, voltages, temperatures) is NaN, as on RTDE.
+throughout. What is not simulated (voltages, temperatures) is NaN, as on RTDE.
 
 A package is an int32 size (of the whole package, header included) and a uint8 type:
 
@@ -121,12 +121,13 @@ NAN = float('nan')
 
 
 def joint_data(host: Host) -> bytes:
-    """Under the simulation lock: per joint (interleaved) actual and target position, actual velocity (as RTDE's),
-    current, voltage, motor and micro temperature (float; not simulated: NaN, the deprecated micro one 0) and the
-    joint mode."""
-    q, q_target, qd = (READERS[n](host) for n in ('actual_q', 'target_q', 'actual_qd'))
+    """Under the simulation lock: per joint (interleaved) actual and target position, actual velocity and motor
+    current (as RTDE's), voltage, motor and micro temperature (float; not simulated: NaN, the deprecated micro one 0)
+    and the joint mode."""
+    q, q_target, qd, current = (READERS[n](host) for n in ('actual_q', 'target_q', 'actual_qd', 'actual_current'))
     mode = joint_mode(host.robot.robot_mode)
-    body = b''.join(struct.pack('>3d4fB', q[j], q_target[j], qd[j], NAN, NAN, NAN, 0.0, mode) for j in range(6))
+    body = b''.join(struct.pack('>3d4fB', q[j], q_target[j], qd[j], current[j], NAN, NAN, 0.0, mode)
+                    for j in range(6))
     return sub_package(JOINT_DATA, body)
 
 

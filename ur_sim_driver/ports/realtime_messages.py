@@ -3,7 +3,7 @@
 extend at the end.
 
 The values are the RTDE output variables of the same names (``rtde_fields.READERS``), so both interfaces report one
-robot, with the same NaN for what ur_sim does not simulate (currents, voltages, temperatures, the tool accelerometer,
+robot, with the same NaN for what ur_sim does not simulate (voltages, temperatures, the tool accelerometer,
 the momentum, the controller's timer). The fields UR reserves for its own software are 0.
 """
 from __future__ import annotations

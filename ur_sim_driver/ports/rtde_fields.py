@@ -2,8 +2,9 @@
 
 Output variables are read under the simulation lock, from the same objects the ROS side reads: the arm (joint
 state, servo setpoint, TCP pose, wrench, payload), the robot's modes and program state, the IO bank, the speed
-scaling and the registers. The electrical and thermal values a UR reports (currents, voltages, temperatures, the
-controller's execution time) and the tool accelerometer and momentum are not simulated: they are NaN, a value no
+scaling and the registers, the joints' motor currents (``robot/motor_currents.py``). The other electrical and thermal
+values a UR reports (voltages, temperatures, the robot's current, the controller's execution time) and the tool
+accelerometer and momentum are not simulated: they are NaN, a value no
 client can take for a measurement, so that clients that ask for them (ur_rtde's RTDEReceiveInterface asks for
 every variable by default) still run. Any other variable ur_sim does not fill (Euromap67, ...) is answered
 ``NOT_FOUND`` at set-up, as the robot answers a name it does not know. Input variables change the robot as the
@@ -25,6 +26,7 @@ from ur_sim_driver.controllers.base import Host
 from ur_sim_driver.controllers.io_and_status import TOOL_TEMPERATURE
 from ur_sim_driver.robot.encoders import reported_velocity
 from ur_sim_driver.robot.io_bank import CURRENT, N_ANALOG, VOLTAGE, analog_out_refusal
+from ur_sim_driver.robot.motor_currents import current_as_torque, motor_currents
 from ur_sim_driver.robot.registers import bits_word, set_bits_word
 from ur_sim_driver.robot.robot_state import (
     PAUSED,
@@ -124,7 +126,10 @@ READERS: dict[str, Callable[[Host], object]] = {
     'timestamp': lambda h: h.sim.time,
     'target_q': lambda h: _target(h, 0), 'target_qd': lambda h: _target(h, 1), 'target_qdd': lambda h: _target(h, 2),
     'target_moment': lambda h: _vec(h.sim.state().effort),
-    'actual_current_as_torque': lambda h: _vec(h.sim.state().effort),  # the simulated motors' torques [N m]
+    # The motor currents [A] from the drive torques (robot/motor_currents.py); the servo's target torque is the one
+    # the drives deliver in the simulation, so the target current is the actual one.
+    'actual_current': lambda h: _vec(motor_currents(h.sim)), 'target_current': lambda h: _vec(motor_currents(h.sim)),
+    'actual_current_as_torque': lambda h: _vec(current_as_torque(h.sim)),  # less the believed gravity [N m]
     'actual_q': lambda h: _vec(h.sim.state().q),
     'actual_qd': lambda h: _vec(reported_velocity(h.sim.state().qd, h.sim.control_dt)),
     'actual_TCP_pose': _pose, 'actual_TCP_force': lambda h: _vec(h.sim.tcp_force()),
@@ -155,8 +160,7 @@ READERS: dict[str, Callable[[Host], object]] = {
     'elbow_position': lambda h: _elbow(h)[0], 'elbow_velocity': lambda h: _elbow(h)[1],
     'joint_mode': lambda h: (joint_mode(h.robot.robot_mode),) * 6,
     'ft_raw_wrench': lambda h: _vec(h.sim.raw_wrench()),  # neither zeroed nor payload-compensated; tool0 axes
-    **{name: (lambda h: NAN6) for name in ('target_current', 'actual_current', 'joint_control_output',
-                                            'joint_temperatures', 'actual_joint_voltage')},
+    **{name: (lambda h: NAN6) for name in ('joint_control_output', 'joint_temperatures', 'actual_joint_voltage')},
     **{name: (lambda h: NAN) for name in ('actual_execution_time', 'actual_momentum', 'actual_main_voltage',
                                            'actual_robot_voltage', 'actual_robot_current')},
     'actual_tool_accelerometer': lambda h: (NAN,) * 3,

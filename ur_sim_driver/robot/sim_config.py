@@ -36,6 +36,10 @@ class SimConfig:
     # rating and software version are the robot's; the driver checks the two agree (verify_robot_model).
     simulated_ur_type: str = ''
     verify_robot_model: bool = True  # ur.urdf.xacro's default
+    # Joint efforts (/joint_states, the effort state interfaces) as the motor currents [A], as the driver at a16a268
+    # reports them; false: the torques less gravity [N m] (RTDE actual_current_as_torque, 5.23.0 / 10.11.0 on), as
+    # the hardware parameter of the driver's later releases (robot/motor_currents.py).
+    use_currents_as_efforts: bool = True
     tf_prefix: str = ''
     namespace: str = ''
     joints: tuple[str, ...] = DEFAULT_JOINTS
@@ -208,6 +212,7 @@ def sim_config_from_params(params: Mapping[str, Any]) -> SimConfig:
         ur_type=ur_type,
         simulated_ur_type=robot,
         verify_robot_model=bool(get('verify_robot_model', d.verify_robot_model)),
+        use_currents_as_efforts=bool(get('use_currents_as_efforts', d.use_currents_as_efforts)),
         software_version=parse_version(str(get('software_version', '')), robot),
         tf_prefix=str(get('tf_prefix', d.tf_prefix)),
         namespace=str(get('namespace', d.namespace)),

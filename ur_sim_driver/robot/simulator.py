@@ -209,6 +209,12 @@ class Simulator:
         self._servo_active = False
         return tau
 
+    @property
+    def coulomb_cancelled(self) -> bool:
+        """The joints' Coulomb friction is left out of the physics (the servo's modes cancel it); under torque
+        control the joints feel what the compensation leaves."""
+        return self._felt_scales is None
+
     def _servo_friction(self) -> None:
         """The servo's modes after torque control: the joints' viscous friction, no Coulomb friction (the servo
         cancels it)."""

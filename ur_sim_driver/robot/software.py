@@ -167,6 +167,8 @@ def required(command: str, version: SoftwareVersion) -> SoftwareVersion | None:
 # library check them: torque control (hardware_interface.cpp, prepare_command_mode_switch) and friction scales for
 # it (ScriptCommandInterface::setFrictionScales).
 TORQUE_CONTROL = (_v('5.23.0'), _v('10.10.0'))
+# RTDE actual_current_as_torque, which the driver's use_currents_as_efforts: false reads (its on_configure check)
+CURRENT_AS_TORQUE = (_v('5.23.0'), _v('10.11.0'))
 FRICTION_SCALES = (_v('5.25.1'), _v('10.12.1'))
 # URScript's optimovej / optimovel, as the Client Library's External Control program guards its calls of them
 OPTIMOVE = (_v('5.21.0'), _v('10.8.0'))

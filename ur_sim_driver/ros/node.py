@@ -58,6 +58,7 @@ from ur_sim_driver.ports.tcp_port import PortError, close_all
 from ur_sim_driver.robot.dashboard_server import DashboardServer
 from ur_sim_driver.robot.direct_torque import STOPJ_DECELERATION
 from ur_sim_driver.robot.encoders import reported_velocity
+from ur_sim_driver.robot.motor_currents import current_as_torque, motor_currents
 from ur_sim_driver.robot.robot_state import NORMAL, RUNNING, RobotState
 from ur_sim_driver.robot.safety import ContactSafety, limit_cause, motion_limit_cause
 from ur_sim_driver.robot.sim_config import PARAMETER_NAMES, SimConfig, sim_config_from_params, unknown_parameters
@@ -269,8 +270,11 @@ class UrSimNode(Node):
             self.controller_manager.apply_pending()
             state = self.sim.state()
             # What the hardware reads and the controllers see: velocities as the robot's controller counts them
-            # (encoders.py). The robot's own servo works on the simulated state.
-            reported = ArmState(state.t, state.q, reported_velocity(state.qd, self.sim.control_dt), state.effort)
+            # (encoders.py), efforts as the driver reads them (motor currents [A], or the torques less gravity
+            # with use_currents_as_efforts false). The robot's own servo works on the simulated state.
+            efforts = (motor_currents(self.sim, state) if self.cfg.use_currents_as_efforts
+                       else current_as_torque(self.sim, state))
+            reported = ArmState(state.t, state.q, reported_velocity(state.qd, self.sim.control_dt), efforts)
             self.robot.update(state.t)
             self._controller_stopper()
             hardware = self.controller_manager.hardware
