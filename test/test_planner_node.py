@@ -55,6 +55,11 @@ def test_invalid_job_exits_2_naming_the_field(tmp_path, capsys):
     assert 'tcp_speed' in capsys.readouterr().err
 
 
+def test_an_invalid_video_rate_exits_2_naming_the_parameter(capsys):
+    assert run_job({'job': str(config_dir() / 'glue_job.yaml'), 'video_fps': 0}, threading.Event()) == 2
+    assert 'video_fps: 0 is not a whole number of frames per second in [1, 60]' in capsys.readouterr().err
+
+
 def test_missing_server_exits_3(windshield_sim, capsys):
     code = run_job({'job': str(config_dir() / 'glue_job.yaml'), 'namespace': '/nobody', 'timeout': 0.5},
                    threading.Event(), context=windshield_sim.client.context)

@@ -4,7 +4,8 @@ Works against ur_sim and the real UR driver alike (only their ROS interfaces are
 `job` (YAML path, default config/glue_job.yaml), `out_dir` (default out/<job name>), `namespace` and
 `controller_name` (override the job's), `timeout` [s] for the server and joint states, `render` (bool),
 `method` (constant_speed or seed1, overrides the job's), `compare` (bool: run the other method after it on the
-same job and put both beads side by side), `video` (bool: out_dir/run.mp4), `dispense` (bool: switch the glue
+same job and put both beads side by side), `video` (bool: out_dir/run.mp4), `video_fps` (frames per second of
+robot time, 1 to 60, default 30), `dispense` (bool: switch the glue
 gun on the job's output), `measure_part` (bool, default true: read the cell's part scanners on ur_sim/part_scan,
 fit the part and move the bead onto it; without scanners the job runs on the nominal glass), `pace_topic` (a
 ur_sim started with the same `pace_topic` runs in step with this client, so the gun's switches land where planned
@@ -75,6 +76,7 @@ def run_job(params: dict, stop: threading.Event, context=None) -> int:
         job = load_job(params.get('job') or default_job_path())
         if params.get('method'):
             job = replace(job, method=_choice(params['method'], 'method', METHODS))
+        video_fps = _video_fps(params.get('video_fps', VIDEO_FPS))
     except JobError as exc:
         print(f'ur_glue_planner: invalid job: {exc}', file=sys.stderr)
         return 2
@@ -152,15 +154,27 @@ def run_job(params: dict, stop: threading.Event, context=None) -> int:
             print(f"executed: speed within 1 % on {100 * executed['fraction_within_1pct']:.1f} % of the bead, "
                   f"max tip deviation {executed['max_tip_deviation_mm']:.3f} mm, max joint tracking error "
                   f"{1e3 * executed['max_joint_tracking_error_rad']:.3f} mrad")
-        finish_report(results, out_dir, video=bool(params.get('video', True)))
+        finish_report(results, out_dir, video=bool(params.get('video', True)), video_fps=video_fps)
         print(f'report: {(out_dir / "index.html").resolve()}', flush=True)
         return 0 if all(r[2].succeeded for r in results) else 5
     finally:
         ur.close()
 
 
-def finish_report(results: list, out_dir: Path, video: bool = True) -> dict:
-    """The parts that span the runs: the bead figures side by side, the video, index.html; summary.json again."""
+VIDEO_FPS = 30  # frames per second of robot time in the run's video, unless `video_fps` says otherwise
+
+
+def _video_fps(value) -> int:
+    """The `video_fps` parameter, checked: a whole number of frames per second of robot time in [1, 60]."""
+    if isinstance(value, bool) or not isinstance(value, (int, float)) or value != int(value) \
+            or not 1 <= value <= 60:
+        raise JobError(f'video_fps: {value!r} is not a whole number of frames per second in [1, 60]')
+    return int(value)
+
+
+def finish_report(results: list, out_dir: Path, video: bool = True, video_fps: int = VIDEO_FPS) -> dict:
+    """The parts that span the runs: the bead figures side by side, the video (`video_fps` frames per second of
+    robot time), index.html; summary.json again."""
     plan, run, _, summary = results[0]
     if len(results) > 1:
         base = results[1]
@@ -179,9 +193,9 @@ def finish_report(results: list, out_dir: Path, video: bool = True) -> dict:
                        'bead.png'))
     movie = None
     if video and run is not None and run.whole is not None and len(run.whole.t) > 1:
-        print('rendering the video (MuJoCo off-screen, 30 fps of robot time):', flush=True)
+        print(f'rendering the video (MuJoCo off-screen, {video_fps} fps of robot time):', flush=True)
         info = render_video(plan.robot, plan.tool, scene_meshes(plan), run.whole.t, run.whole.q,
-                            out_dir / 'run.mp4', bead=run.deposit, bead_t0=run.whole_t0)
+                            out_dir / 'run.mp4', bead=run.deposit, bead_t0=run.whole_t0, fps=video_fps)
         summary['video'] = {'file': 'run.mp4', **info}
         print(f"video: {info['frames']} frames, {info['duration_s']:.1f} s, rendered in "
               f"{info['render_seconds']:.1f} s", flush=True)
