@@ -226,9 +226,9 @@ def test_joint_cartesian_and_tool_data_are_the_robots(h, client):
     joints = [state[JOINT].take('3d4fB') for _ in range(6)]  # per joint, interleaved
     assert state[JOINT].rest() == b''
     assert np.allclose([j[0] for j in joints], h.q, atol=1e-4) and np.allclose([j[1] for j in joints], h.q, atol=1e-3)
-    with h.sim.host.lock:  # the arm holds still: as RTDE's actual_current
+    with h.sim.host.lock:  # as RTDE's actual_current (the same reader); the state is of a cycle or more before
         currents = motor_currents(h.sim.sim)
-    assert np.allclose([j[3] for j in joints], currents, rtol=1e-5, atol=1e-4)
+    assert np.allclose([j[3] for j in joints], currents, atol=0.01)  # the arm at rest: the current's jitter [A]
     assert all(np.isnan(j[4:6]).all() and j[6] == 0.0 and j[7] == 253 for j in joints)  # not simulated; RUNNING
     pose = state[CARTESIAN].take('6d')
     assert state[CARTESIAN].take('6d') == (0.0,) * 6 and state[CARTESIAN].rest() == b''  # no TCP offset

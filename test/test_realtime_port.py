@@ -89,14 +89,16 @@ def test_a_package_every_control_cycle_with_the_robots_values(h):
             times.append(reader.package()[0])
         assert np.allclose(np.diff(times), h.sim.sim.control_dt, atol=1e-9)  # every cycle of simulated time
         values = reader.package()
+        while reader.field(values, 'timestamp')[0] != pytest.approx(h.sim.sim.time, abs=1e-9):
+            values = reader.package()  # to the last cycle's: the simulation holds still between waits
         assert np.allclose(reader.field(values, 'actual_q'), h.q, atol=1e-4)  # the arm holds still
         assert reader.field(values, 'robot_mode')[0] == 7 and list(reader.field(values, 'joint_mode')) == [253] * 6
         assert reader.field(values, 'safety_mode')[0] == 1 and reader.field(values, 'speed_scaling')[0] == 1.0
         with h.sim.host.lock:
             position, _ = h.sim.sim.tcp_pose()
             currents = motor_currents(h.sim.sim)  # the arm holds still: the currents of gravity
-        assert np.allclose(reader.field(values, 'actual_current'), currents, rtol=1e-6, atol=1e-6)
-        assert np.allclose(reader.field(values, 'target_current'), currents, rtol=1e-6, atol=1e-6)
+        assert np.allclose(reader.field(values, 'actual_current'), currents, rtol=1e-12, atol=1e-12)
+        assert np.allclose(reader.field(values, 'target_current'), currents, rtol=1e-12, atol=1e-12)
         assert np.allclose(reader.field(values, 'actual_TCP_pose')[:3], position, atol=1e-4)
     finally:
         reader.sock.close()

@@ -20,7 +20,7 @@ from sim_harness import point, running_sim, wait_for, wait_still
 from ur_glue_planner.motion.kinematics import Kinematics
 from ur_sim_driver.ports import rtde_protocol as rp
 from ur_sim_driver.ports.rtde_port import BACKLOG
-from ur_sim_driver.robot.motor_currents import motor_currents
+from ur_sim_driver.robot.motor_currents import current_as_torque, motor_currents
 
 TIMEOUT = 10.0  # [s] of wall time for an answer
 
@@ -84,10 +84,31 @@ def _cycles(h, n: int) -> None:
     wait_for(lambda: h.sim.rtde_port.cycle >= start + n, what=f'{n} control cycles')
 
 
+def _newest(h, client: RtdeClient, types: list[str]) -> list:
+    """The values of the package of the last cycle run (the recipe's first variable is `timestamp`): the
+    simulation holds still between waits, so they are the robot's values now."""
+    while True:
+        values = _unpack(types, client.data()[1])
+        if values[0] == pytest.approx(h.sim.sim.time, abs=1e-9):
+            return values[1:]
+
+
 def _connect(h, receive_buffer: int | None = None) -> RtdeClient:
     client = RtdeClient(h.sim.rtde_port.address, receive_buffer)
     assert client.request(ord('V'), struct.pack('>H', 2)) == b'\x01'
     return client
+
+
+def test_a_robot_before_5_23_does_not_know_current_as_torque():
+    """As every robot before 5.23.0 / 10.11.0 (and every CB3): actual_current_as_torque is NOT_FOUND. First in the
+    module: its ur_sim shares the test process's domain, so it must be gone before the module's starts."""
+    with running_sim(software_version='5.22.2') as older:
+        client = _connect(older)
+        try:
+            recipe, types = client.outputs(500.0, ['actual_q', 'actual_current_as_torque'])
+            assert recipe == 0 and types == ['VECTOR6D', 'NOT_FOUND']
+        finally:
+            client.close()
 
 
 def test_version_and_an_output_recipe_streamed_in_simulated_time(h):
@@ -180,13 +201,13 @@ def test_the_target_tcp_is_where_the_setpoint_puts_it(h):
 def test_joint_modes_elbow_raw_wrench_and_currents_are_filled_and_what_is_not_simulated_is_nan(h):
     client = _connect(h)
     try:
-        names = ['joint_mode', 'elbow_position', 'elbow_velocity', 'ft_raw_wrench', 'actual_current',
+        names = ['timestamp', 'joint_mode', 'elbow_position', 'elbow_velocity', 'ft_raw_wrench', 'actual_current',
                  'actual_main_voltage', 'actual_tool_accelerometer']
         recipe, types = client.outputs(500.0, names)
         assert recipe == 1 and 'NOT_FOUND' not in types
         assert client.request(ord('S')) == b'\x01'
         _cycles(h, 2)
-        modes, elbow, elbow_v, raw, current, voltage, accelerometer = _unpack(types, client.data()[1])
+        modes, elbow, elbow_v, raw, current, voltage, accelerometer = _newest(h, client, types)
         assert list(modes) == [253] * 6  # RUNNING, as the robot mode
         with h.sim.host.lock:  # the forearm link's origin in the base frame, from MuJoCo directly
             d, physics = h.sim.sim.physics.data, h.sim.sim.physics
@@ -197,7 +218,7 @@ def test_joint_modes_elbow_raw_wrench_and_currents_are_filled_and_what_is_not_si
         assert np.isfinite(raw).all()
         with h.sim.host.lock:
             expected_current = motor_currents(h.sim.sim)  # the arm holds still: the currents of gravity
-        assert np.allclose(current, expected_current, atol=1e-3)  # the cycle before: the arm settles still
+        assert np.allclose(current, expected_current, rtol=1e-12, atol=1e-12)
         assert np.isnan(voltage) and np.isnan(accelerometer).all()
     finally:
         client.close()
@@ -239,6 +260,25 @@ def test_unknown_names_answer_not_found_and_a_held_input_in_use(h):
     finally:
         first.close()
         second.close()
+
+
+def test_current_as_torque_is_the_drive_torques_less_gravity(h):
+    """actual_current_as_torque on 5.25.1: the drive torques less the believed gravity (a 5.22 robot does not know
+    the name: test_a_robot_before_5_23_does_not_know_current_as_torque)."""
+    client = _connect(h)
+    try:
+        recipe, types = client.outputs(500.0, ['timestamp', 'actual_current_as_torque', 'target_moment'])
+        assert recipe == 1 and types == ['DOUBLE', 'VECTOR6D', 'VECTOR6D']
+        assert client.request(ord('S')) == b'\x01'
+        _cycles(h, 2)
+        torques, moments = _newest(h, client, types)
+        with h.sim.host.lock:
+            expected = current_as_torque(h.sim.sim)
+            gravity = h.sim.sim.gravity_compensation()
+        assert np.allclose(torques, expected, rtol=1e-12, atol=1e-12)
+        assert np.abs(torques).max() < 0.1 and np.allclose(moments, gravity, atol=0.1)  # at rest: gravity taken off
+    finally:
+        client.close()
 
 
 def test_inputs_change_the_robot_and_show_on_the_ros_side(h):

@@ -36,6 +36,7 @@ from ur_sim_driver.robot.robot_state import (
     ROBOT_EMERGENCY_STOP,
     SYSTEM_EMERGENCY_STOP,
 )
+from ur_sim_driver.robot.software import CURRENT_AS_TORQUE, SoftwareVersion, supports
 from ur_sim_driver.robot.speed_scaling import SLIDER_MAX
 
 NAN = float('nan')  # a value ur_sim does not simulate
@@ -191,6 +192,18 @@ READERS: dict[str, Callable[[Host], object]] = {
                                            'collision_detection_ratio')},
     **_register_readers(),
 }
+
+#: Output variables newer than some robots: the first software versions (PolyScope 5, PolyScope X) that have them;
+#: an older robot (every CB3) answers NOT_FOUND, as for a name it does not know. actual_current_as_torque: the
+#: driver's use_currents_as_efforts check (software.CURRENT_AS_TORQUE).
+NEWER_OUTPUTS: dict[str, tuple] = {'actual_current_as_torque': CURRENT_AS_TORQUE}
+
+
+def served(name: str, version: SoftwareVersion) -> bool:
+    """The robot of software `version` fills output variable `name`."""
+    minima = NEWER_OUTPUTS.get(name)
+    return name in READERS and (minima is None or supports(version, minima))
+
 
 #: Input variables a client may write (the others of the protocol's input list answer NOT_FOUND).
 WRITABLE = frozenset({

@@ -27,7 +27,7 @@ from dataclasses import dataclass
 
 from ur_sim_driver.controllers.base import Host
 from ur_sim_driver.ports import rtde_protocol as rp
-from ur_sim_driver.ports.rtde_fields import READERS, WRITABLE, CycleValues, write
+from ur_sim_driver.ports.rtde_fields import WRITABLE, CycleValues, served, write
 from ur_sim_driver.ports.tcp_port import TcpPort
 
 BACKLOG = 1000  # packages queued per connection
@@ -199,7 +199,8 @@ class _Session:
             (frequency,) = struct.unpack('>d', payload[:8])
             payload = payload[8:]
         names = tuple(n for n in payload.decode().split(',') if n)
-        types = tuple(rp.OUTPUTS[n] if n in rp.OUTPUTS and n in READERS else rp.NOT_FOUND for n in names)
+        version = self.port.host.dashboard.version
+        types = tuple(rp.OUTPUTS[n] if n in rp.OUTPUTS and served(n, version) else rp.NOT_FOUND for n in names)
         refusal = None
         if names and rp.NOT_FOUND not in types:
             size = rp.HEADER.size + 1 + rp.recipe_format(types).size
