@@ -1,4 +1,7 @@
 """The studio's page logic without a browser or ROS: picking, keys, the gizmo, plan and playback, save."""
+import re
+import threading
+
 import numpy as np
 import pytest
 import yaml
@@ -7,7 +10,7 @@ from studio_browser import free_port, wait_until
 from ur_common.paths import config_dir
 from ur_glue_planner.orientation import rotation_from_zyx_euler
 from ur_glue_planner.studio import scene_view as sv
-from ur_glue_planner.studio.app import Studio
+from ur_glue_planner.studio.app import INITIAL_CAMERA, Studio, view_lost
 
 
 @pytest.fixture(scope='module')
@@ -94,3 +97,74 @@ def test_a_run_result_stays_shown_while_its_thread_closes_its_client():
         closing.set()
         s.close()
         live.close()
+
+
+def test_the_plan_text_counts_the_wait_from_the_click(studio):
+    """The plan's text states the user's wait from the click (given to plan_now), not planning's own time."""
+    import time
+    plan = studio.plan_now(clicked=time.monotonic() - 20.0)  # a click 20 s ago: a loaded machine's wait
+    assert plan is not None
+    waited = float(re.search(r'ready ([0-9.]+) s after Plan was pressed', studio.panel.plan_info.content).group(1))
+    assert 20.0 <= waited < 20.0 + 120.0 and plan.summary.planning_seconds < waited
+
+
+def test_a_view_that_left_the_cell_is_lost():
+    assert view_lost(INITIAL_CAMERA[0], INITIAL_CAMERA[1]) is None
+    assert view_lost((3.0, -2.0, 0.5), (2.0, -2.0, 0.5)) is None  # looking away, but about a point near the cell
+    assert 'view centre' in view_lost((9.0, 1.5, 1.0), (8.0, 0.4, 0.3))  # W held on a slow page: metres past it
+    assert 'camera' in view_lost((0.0, 0.0, 13.0), (0.0, 0.0, 0.0))  # zoomed far out
+    assert 'not a number' in view_lost((np.nan, 0.0, 1.0), (0.0, 0.0, 0.0))
+
+
+class _Run:
+    """A run the Stop click asks to end: records when it was asked, and the end it waits for."""
+
+    def __init__(self) -> None:
+        self.running = True
+        self.asked = threading.Event()
+        self.ended = threading.Event()
+
+    def request_stop(self) -> None:
+        self.asked.set()
+
+    def stop_run(self) -> None:
+        self.ended.wait(30.0)
+
+
+def test_stop_asks_the_run_to_cancel_while_the_studio_is_busy():
+    """A Stop click cancels the goal even while another thread holds the studio's lock (the page loop drawing the
+    robot and the bead): its message and the wait for the run's end come after."""
+    from ur_glue_planner.studio.messages import MessageLog
+    from ur_glue_planner.studio.run_view import RunView
+
+    class Busy(RunView):
+        def __init__(self) -> None:
+            self._lock = threading.RLock()
+            self.live = _Run()
+            self.log = MessageLog()
+
+        def say(self, text: str) -> None:
+            with self._lock:
+                self.log.say(text)
+
+    studio = Busy()
+    release = threading.Event()
+    held = threading.Event()
+
+    def busy() -> None:
+        with studio._lock:
+            held.set()
+            release.wait(30.0)
+    holder = threading.Thread(target=busy, daemon=True)
+    holder.start()
+    assert held.wait(10.0)
+    stop = threading.Thread(target=studio.stop_run, daemon=True)
+    try:
+        stop.start()
+        assert studio.live.asked.wait(10.0), 'Stop waited for the studio lock before cancelling'
+    finally:
+        release.set()
+        studio.live.ended.set()
+        holder.join(10.0)
+        stop.join(10.0)
+    assert studio.log.history[-1] == 'stop: cancelling the goal'

@@ -5,7 +5,7 @@ import pytest
 from ur_common.paths import config_dir
 from ur_glue_planner.job import load_job
 from ur_glue_planner.motion.plan import plan_job
-from ur_glue_planner.studio.figures import FIGURES, bead_window, plan_figures, speed_summary
+from ur_glue_planner.studio.figures import FIGURES, bead_window, duration_text, plan_figures, speed_summary
 from ur_glue_planner.studio.playback import Timeline
 
 
@@ -21,9 +21,15 @@ def test_four_non_blank_figures_and_the_speed_text():
     text = speed_summary(plan)
     assert f'{plan.summary.speed_mean:.4f}' in text and 'Within 1 %' in text
     # What the user waited for, from the click, with the planner's share of it.
-    waited = speed_summary(plan, 1.234)
-    assert 'ready 1234 ms after Plan was pressed' in waited
-    assert f'(planning {1e3 * plan.summary.planning_seconds:.0f} ms of it)' in waited
+    waited = speed_summary(plan, 16.34)  # a loaded machine's wait: seconds, beside planning's share
+    assert 'ready 16.3 s after Plan was pressed' in waited
+    assert f'(planning {duration_text(plan.summary.planning_seconds)} of it)' in waited
+    assert 'ready 734 ms after' in speed_summary(plan, 0.734)
+
+
+def test_a_wait_in_the_unit_a_user_reads():
+    assert duration_text(0.3604) == '360 ms' and duration_text(0.9994) == '999 ms'
+    assert duration_text(1.0) == '1.0 s' and duration_text(41.26) == '41.3 s'
 
 
 def test_the_figures_and_the_slider_say_which_time_they_show():

@@ -188,9 +188,9 @@ def execute(ur: URClient, plan: GluePlan, stop: threading.Event, log: Callable[[
             while not goal.done:
                 if stop.is_set():
                     log(f'\ninterrupted: cancelling the {seg.name} goal')
-                    if gun is not None:
-                        gun.off(plan.dispense.pin)
-                    goal.cancel()
+                    # The cancel goes first and the gun is switched off while it travels: each waits for its
+                    # answer, which a loaded machine can delay by seconds (the robot ran on meanwhile).
+                    goal.cancel(meanwhile=(lambda: gun.off(plan.dispense.pin)) if gun is not None else None)
                     goal.wait(timeout=10.0)
                     raise Interrupted(seg.name)
                 time.sleep(0.02)

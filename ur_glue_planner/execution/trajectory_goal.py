@@ -58,9 +58,12 @@ class TrajectoryGoal:
     def done(self) -> bool:
         return self._result_future.done()
 
-    def cancel(self, timeout: float = 5.0) -> None:
-        """Ask the server to cancel; the robot stops and holds (the result then says canceled)."""
+    def cancel(self, timeout: float = 5.0, meanwhile: Callable[[], object] | None = None) -> None:
+        """Ask the server to cancel; the robot stops and holds (the result then says canceled). `meanwhile` runs
+        once the request is on its way, before its answer [s of wall time, `timeout`] is waited for."""
         future = self._handle.cancel_goal_async()
+        if meanwhile is not None:
+            meanwhile()
         wait_until(future.done, timeout, 'no answer to the cancel request')
 
     @property

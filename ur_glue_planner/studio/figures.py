@@ -94,5 +94,11 @@ def speed_summary(plan: GluePlan, waited: float | None = None) -> str:
             f'(commanded {plan.job.tcp_speed:.3f})  \n'
             f'**Within 1 %** on {100 * s.within_1pct:.1f} % of the bead; {s.slowdowns} slowdown(s); '
             f'peak joint speed {100 * s.max_velocity_usage:.0f} % of the limit  \n'
-            + (f'ready {1e3 * waited:.0f} ms after Plan was pressed (planning {1e3 * s.planning_seconds:.0f} ms of it)'
-               if waited is not None else f'planned in {1e3 * s.planning_seconds:.0f} ms'))
+            + (f'ready {duration_text(waited)} after Plan was pressed (planning {duration_text(s.planning_seconds)} '
+               f'of it)' if waited is not None else f'planned in {duration_text(s.planning_seconds)}'))
+
+
+def duration_text(seconds: float) -> str:
+    """A wait [s] as a user reads it: ms below a second, else seconds to 0.1 s."""
+    return f'{1e3 * seconds:.0f} ms' if seconds < 1.0 else f'{seconds:.1f} s'
+

@@ -42,12 +42,14 @@ class PlanView:
         self._keep_reach(teach, results)
         return plan_failure(planner_message, results, teach.planned_indices())
 
-    def plan_now(self) -> GluePlan | None:
+    def plan_now(self, clicked: float | None = None) -> GluePlan | None:
         """Plan the taught job (the planner's plan_job), draw the bead by speed, show the figures.
 
         The model robot then shows the selected waypoint's IK again; play or the slider play the plan on it.
+        ``clicked``: when Plan was pressed (``time.monotonic()`` [s] in the click's handler; None: now), from which
+        the plan's text counts the user's wait.
         """
-        clicked = time.monotonic()
+        clicked = time.monotonic() if clicked is None else clicked
         self.begin('planning ...')
         with self._lock:
             if self.sjob is None:
@@ -80,9 +82,10 @@ class PlanView:
             for name, image in figures.items():
                 self.panel.images[name].image = image
                 self.panel.images[name].visible = True
-            self.panel.plan_info.content = speed_summary(plan, time.monotonic() - clicked)
             self.part_view.show(plan)
             self.show_ik()
+            # Last, so that the wait it states includes the drawing above (the IK robot and markers too).
+            self.panel.plan_info.content = speed_summary(plan, time.monotonic() - clicked)
         self.say(f'planned: bead {plan.summary.bead_length:.3f} m, {plan.summary.total_duration:.2f} s')
         return plan
 

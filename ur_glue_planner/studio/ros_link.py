@@ -134,6 +134,11 @@ class LiveRobot:
         """(how many bead messages arrived, the newest bead in the planner's world frame or None)."""
         return self.bead_listener.received, self.bead_listener.bead()
 
+    @property
+    def beads_received(self) -> int:
+        """How many bead messages arrived (cheap: :meth:`bead` reads the whole cloud)."""
+        return self.bead_listener.received
+
     # ---- running a plan --------------------------------------------------------------------------------------
     @property
     def running(self) -> bool:
@@ -194,6 +199,10 @@ class LiveRobot:
         if self.client is None:
             self.client = StudioClient(namespace, controller_name, timeout, self.context)
         return self.client
+
+    def request_stop(self) -> None:
+        """Ask the run to cancel its active goal, at once and without waiting (the run's loop looks every 20 ms)."""
+        self._stop.set()
 
     def stop_run(self, timeout: float = 15.0) -> None:
         """Cancel the active goal (the robot stops and holds) and wait for the run to end."""

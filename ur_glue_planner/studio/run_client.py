@@ -11,6 +11,11 @@ clock was wrong.
 Here one client serves every run (no node made per run), and the bead's margin comes from the answers to earlier
 beads when there are any: a measured delivery of a goal that long, not one extrapolated 8-fold from a short goal.
 The first run after connecting has none and extrapolates as the planner does.
+
+An earlier bead counts when it had at least ``BEAD_SHARE`` of the new bead's points, its answer scaled up by the
+ratio: a bead planned on a measured part is a little longer or shorter than the one before, so it has a few
+points more or fewer; when only beads of at least as many points counted, a longer one found no earlier bead and
+its wait went back to the short goals' extrapolation (issue 44: 1.1 s -> 5.7 s on a measured part).
 """
 from __future__ import annotations
 
@@ -20,17 +25,19 @@ from ur_glue_planner.execution.bead_listener import BeadListener
 from ur_glue_planner.execution.client import URClient, delivery_margin
 from ur_glue_planner.execution.dispenser_io import DispenserIO, dispenser_for
 
-RECENT = 5  # answers of earlier goals at least as long as the bead that set its margin (the newest)
+RECENT = 5  # answers of earlier beads that set the margin (the newest)
+BEAD_SHARE = 0.5  # an earlier goal of at least this share of the bead's points is a bead (approach 201, bead 792)
 NODE_NAME = 'ur_glue_studio_client'
 
 
 def bead_margin(answers: Sequence[tuple[float, int]], delivery: float, points: int) -> float:
     """Wall time [s] allowed for a goal of ``points`` points to reach the controller.
 
-    ``answers``: (seconds, points) of the goals sent before, oldest first. The RECENT newest of at least ``points``
-    points decide when there are any (``delivery_margin`` of them, unscaled); else ``delivery_margin`` of all.
+    ``answers``: (seconds, points) of the goals sent before, oldest first. The RECENT newest of at least
+    ``BEAD_SHARE`` x ``points`` points decide when there are any (``delivery_margin`` of them, each scaled to
+    ``points`` when shorter: at most 1 / BEAD_SHARE-fold); else ``delivery_margin`` of all.
     """
-    same = [a for a in answers if a[1] >= points][-RECENT:]
+    same = [a for a in answers if a[1] >= BEAD_SHARE * points][-RECENT:]
     return delivery_margin(same if same else answers, delivery, points)
 
 

@@ -41,9 +41,18 @@ class RunView:
                             log=self._run_log, on_progress=self._on_run_progress, on_done=self._on_run_done)
 
     def stop_run(self) -> None:
-        if self.live is not None and self.live.running:
-            self.say('stop: cancelling the goal')
-            self.live.stop_run()
+        """Stop the run: its goal is cancelled first, the message and the wait for the run's end come after.
+
+        The request takes no lock of the studio's: the Stop click's thread used to say its message first, under the
+        studio's lock, which the page loop holds while it draws the moving robot and the bead (and a plan while it
+        draws itself), so whatever held it delayed the cancel.
+        """
+        live = self.live
+        if live is None or not live.running:
+            return
+        live.request_stop()
+        self.say('stop: cancelling the goal')
+        live.stop_run()
 
     def _run_log(self, text: str) -> None:
         if not text.lstrip().startswith('['):
