@@ -10,7 +10,7 @@ from studio_browser import free_port, wait_until
 from ur_common.paths import config_dir
 from ur_glue_planner.orientation import rotation_from_zyx_euler
 from ur_glue_planner.studio import scene_view as sv
-from ur_glue_planner.studio.app import INITIAL_CAMERA, Studio, view_lost
+from ur_glue_planner.studio.app import Studio
 
 
 @pytest.fixture(scope='module')
@@ -106,14 +106,6 @@ def test_the_plan_text_counts_the_wait_from_the_click(studio):
     assert plan is not None
     waited = float(re.search(r'ready ([0-9.]+) s after Plan was pressed', studio.panel.plan_info.content).group(1))
     assert 20.0 <= waited < 20.0 + 120.0 and plan.summary.planning_seconds < waited
-
-
-def test_a_view_that_left_the_cell_is_lost():
-    assert view_lost(INITIAL_CAMERA[0], INITIAL_CAMERA[1]) is None
-    assert view_lost((3.0, -2.0, 0.5), (2.0, -2.0, 0.5)) is None  # looking away, but about a point near the cell
-    assert 'view centre' in view_lost((9.0, 1.5, 1.0), (8.0, 0.4, 0.3))  # W held on a slow page: metres past it
-    assert 'camera' in view_lost((0.0, 0.0, 13.0), (0.0, 0.0, 0.0))  # zoomed far out
-    assert 'not a number' in view_lost((np.nan, 0.0, 1.0), (0.0, 0.0, 0.0))
 
 
 class _Run:

@@ -91,27 +91,6 @@ def test_reset_view_brings_the_camera_back_where_a_new_page_has_it(studio, page)
                and np.allclose(client.camera.look_at, INITIAL_CAMERA[1], atol=1e-6), 'the camera back')
 
 
-def _camera_back(client) -> bool:
-    return (np.allclose(client.camera.position, INITIAL_CAMERA[0], atol=1e-6)
-            and np.allclose(client.camera.look_at, INITIAL_CAMERA[1], atol=1e-6))
-
-
-def test_the_r_key_resets_the_view(studio, page):
-    client = page.studio_client
-    set_camera(client, (3.0, -2.0, 0.5), (2.0, -2.0, 0.5))
-    page.evaluate('document.activeElement && document.activeElement.blur()')
-    page.keyboard.press('r')
-    wait_until(lambda: _camera_back(client), 'the camera back')
-
-
-def test_a_view_flown_out_of_the_cell_comes_back(studio, page):
-    """W held on a slow page moved the camera metres past the cell (a blank view): the studio puts it back."""
-    client = page.studio_client
-    set_camera(client, (9.0, 1.5, 1.0), (8.0, 0.4, 0.3))  # as W/D held through a few slow frames leave it
-    wait_until(lambda: _camera_back(client), 'the camera back')
-    assert any(line.startswith('view reset: the view centre was') for line in studio.messages)
-
-
 def test_after_typing_a_waypoint_number_the_keys_turn_the_tool_again(studio, page):
     _settled(studio)
     field = page.get_by_label('Waypoint', exact=True)

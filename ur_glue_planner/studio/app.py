@@ -49,29 +49,6 @@ LOOP_RATE = 60.0  # [Hz] page updates: playback, live robot
 # [m] camera position and look-at for a new page: from beyond the glass, looking back at the robot (the look-at
 # lies beside the cell so that the cell shows left of the control panel)
 INITIAL_CAMERA = ((0.45, 1.5, 1.0), (-0.3, 0.4, 0.28))
-# [m] from the robot's base: a view whose look-at or camera is farther has left the cell (the cell lies within
-# 1.5 m of the base; the page turns and zooms about the look-at)
-LOOK_AT_BOUND = 4.0
-CAMERA_BOUND = 12.0
-
-
-def view_lost(position, look_at) -> str | None:
-    """Why a camera at ``position`` looking at ``look_at`` [m] shows nothing of the cell, or None if it may.
-
-    viser's page moves the camera and its look-at together by 2 m a second times each frame's time while W/A/S/D/Q/E
-    are held; a page drawing a frame a second or slower (software WebGL on a loaded machine) moved both metres
-    past the cell at one key press, leaving a blank view (and the same keys need as long to come back).
-    """
-    position, look_at = np.asarray(position, dtype=float), np.asarray(look_at, dtype=float)
-    if not (np.all(np.isfinite(position)) and np.all(np.isfinite(look_at))):
-        return 'the camera pose is not a number'
-    if np.linalg.norm(look_at) > LOOK_AT_BOUND:
-        return f'the view centre was {np.linalg.norm(look_at):.1f} m from the robot'
-    if np.linalg.norm(position) > CAMERA_BOUND:
-        return f'the camera was {np.linalg.norm(position):.1f} m from the robot'
-    return None
-
-
 class Studio(TeachView, PlanView, RunView):
     """The glue studio served on http://host:port.
 
@@ -150,29 +127,20 @@ class Studio(TeachView, PlanView, RunView):
         return self.live_view.bead_points_drawn if self.live_view is not None else 0
 
     def _on_connect(self, client) -> None:
-        """A new page: its camera at :meth:`reset_view`'s pose, put back there whenever it leaves the cell."""
+        """A new page: its camera at :meth:`reset_view`'s pose."""
         self.reset_view(client)
-        client.camera.on_update(self._on_camera)
 
     def reset_view(self, client) -> None:
-        """A page's camera where a new page has it (the Reset view button and key): the cell from the front left,
+        """A page's camera where a new page has it (the Reset view button): the cell from the front left,
         above the glass (the default view looks from far away)."""
         client.camera.up_direction = (0.0, 0.0, 1.0)
         client.camera.position = INITIAL_CAMERA[0]
         client.camera.look_at = INITIAL_CAMERA[1]
 
-    def _on_camera(self, camera) -> None:
-        """A page's camera moved: put it back if it has left the cell (:func:`view_lost`)."""
-        why = view_lost(camera.position, camera.look_at)
-        if why is not None:
-            self.say(f'view reset: {why} (R resets the view)')
-            self.reset_view(camera.client)
-
     # ---- GUI ---------------------------------------------------------------------------------------------------
     def _wire(self, with_job: bool) -> None:
         p = self.panel
         p.reset_view.on_click(lambda e: e.client is not None and self.reset_view(e.client))
-        p.reset_key.on_trigger(lambda e: e.client is not None and self.reset_view(e.client))
         if not with_job:
             p.clear_trail.on_click(lambda _: self._reset_trail())
             return

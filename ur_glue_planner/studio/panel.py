@@ -19,12 +19,11 @@ from ur_glue_planner.studio.robot_status import status_html
 HELP = ('**Keys** (seed 1): Up/Down rotate the tool about X, Left/Right about Y, by the step; '
         '**C** saves the orientation of the current waypoint, **N** goes to the next. A waypoint left without C '
         'is skipped by the plan. The arrow keys turn only the tool (the mouse turns the view); the line above the '
-        'tabs says where the keys go; **R** (or Reset view) puts the view back where it started. Click the glass '
-        'to add a waypoint after the selected one; click a marker to select it; drag the gizmo to move it on the '
-        'glass or turn it.')
+        'tabs says where the keys go; Reset view puts the view back where it started. Click the glass to add a '
+        'waypoint after the selected one; click a marker to select it; drag the gizmo to move it on the glass or '
+        'turn it.')
 TIME_LABEL = 'Job time [s]'  # the whole job; the figures show the bead (their axes say which part)
 LIVE_TEXT = '**Live viewer**: any robot publishing joint_states and robot_description.'
-RESET_KEY = 'R'  # the Reset view button's key (W/A/S/D/Q/E move the view, the arrows turn the tool, C and N)
 #: The page's hotkeys and the seed's key each one is.
 KEYS = {'arrowup': 'up', 'arrowdown': 'down', 'arrowleft': 'left', 'arrowright': 'right', 'C': 'c', 'N': 'n'}
 
@@ -60,7 +59,6 @@ class Panel:
     load_button: object = None
     commands: dict | None = None
     reset_view: object = None
-    reset_key: object = None
 
 
 def build_panel(gui: viser.GuiApi, with_job: bool, live: bool, save_default: str) -> Panel:
@@ -72,13 +70,11 @@ def build_panel(gui: viser.GuiApi, with_job: bool, live: bool, save_default: str
         p.live_text = gui.add_markdown(LIVE_TEXT)
         p.clear_trail = gui.add_button('Clear tip path')
         p.reset_view = gui.add_button('Reset view')
-        p.reset_key = gui.add_command('Reset view', hotkey=RESET_KEY)
         return p
     gui.add_html(KEYS_HTML)
     p.legend = gui.add_html(legend_html(legend_entries(True, live)))
     # The camera back where a new page puts it (keys held in the view can fly it anywhere, even out of the scene).
     p.reset_view = gui.add_button('Reset view')
-    p.reset_key = gui.add_command('Reset view', hotkey=RESET_KEY)
     tabs = gui.add_tab_group()
     with tabs.add_tab('Teach'):
         p.wp_info = gui.add_markdown('')
