@@ -42,8 +42,13 @@ def _result(handle):
 
 
 def test_refused_without_an_active_tool_contact_controller(robot):
+    # No action client before the first goal: an idle node does not take every status array of the trajectory
+    # action (a goal storm's cost the simulation loop shared). First in the module: no goal has come yet.
+    node = next(c for c in robot.sim.components if c.name == 'trajectory_until_node')
+    assert node._trajectory_client is None and node._until_client is None
     assert robot.cm.states()[TOOL] == 'inactive'
     assert not _send(robot, 1.0).accepted
+    assert node._trajectory_client is not None  # made by the goal, kept
 
 
 def test_runs_to_the_end_without_contact(robot):

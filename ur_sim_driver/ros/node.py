@@ -138,6 +138,9 @@ class UrSimNode(Node):
         params = self.sim.params
         trajectory_names = (ctrl,) if ctrl == UNSCALED_CONTROLLER else (ctrl, UNSCALED_CONTROLLER)
         self._trajectory: dict[str, JointTrajectoryControllerComponent] = {}
+        # Set once the node is set up: the gateway process answers clients from its start, and a goal sent
+        # meanwhile waits for the controllers (it had found none, and the error ended the receiving thread).
+        self._controllers_ready = threading.Event()
         self.gateway = GatewayLink(GatewayConfig(
             controllers=(*trajectory_names, PassthroughTrajectoryController.name),
             passthrough=(PassthroughTrajectoryController.name,), namespace=self.cfg.namespace, joints=self.joints,
@@ -222,6 +225,7 @@ class UrSimNode(Node):
         # The loop owns the stamps' origin (it moves it to rejoin the system clock); the gateway's copy follows.
         self.loop = SimLoop(self.step_once, self.sim, self.cfg, self.clock, self.pace, self._lock, self.context,
                             self.get_logger(), lambda origin_ns: self.gateway.send(ClockOrigin(origin_ns)))
+        self._controllers_ready.set()
         if start:
             self.loop.start()
         mode = 'as fast as possible' if self.cfg.real_time_factor == 0 else f'RTF {self.cfg.real_time_factor}'
@@ -251,6 +255,7 @@ class UrSimNode(Node):
     # ---- from the gateway process (its receiving thread) -------------------------------------------------------
     def _on_gateway(self, message: object) -> None:
         """A question, trajectory, cancel or dropped topic message for one of the trajectory controllers."""
+        self._controllers_ready.wait()  # only a message sent while ur_sim starts waits (for its set-up)
         if isinstance(message, Dropped):
             self.commands_received += 1
             return

@@ -72,19 +72,28 @@ class TrajectoryUntilNode(Component):
         cfg = host.cfg
         default = startup.initial_joint_controller(cfg) or cfg.controller_name
         motion = node.declare_parameter('motion_controller', default).value
-        # One callback at a time: feedback passed on in the order it came (on the MultiThreadedExecutor a reentrant
-        # group runs two feedback callbacks side by side, and they may publish out of order). None of them blocks.
-        clients = MutuallyExclusiveCallbackGroup()
-        self._trajectory_client = ActionClient(node, FollowJointTrajectory,
-                                               cfg.prefixed(f'{motion}/follow_joint_trajectory'),
-                                               callback_group=clients)
-        self._until_client = ActionClient(node, ToolContact,
-                                          cfg.prefixed('tool_contact_controller/detect_tool_contact'),
-                                          callback_group=clients)
+        self._trajectory_action = cfg.prefixed(f'{motion}/follow_joint_trajectory')
+        self._until_action = cfg.prefixed('tool_contact_controller/detect_tool_contact')
+        self._trajectory_client: ActionClient | None = None  # made by the first goal (_make_clients)
+        self._until_client: ActionClient | None = None
         self._run: _Run | None = None
         self._busy = threading.Lock()
         ActionServer(node, Until, '~/execute', execute_callback=self._execute, goal_callback=self._on_goal,
                      cancel_callback=self._on_cancel, callback_group=MutuallyExclusiveCallbackGroup())
+
+    def _make_clients(self) -> None:
+        """The clients of the two actions, made when the first goal comes. An action client receives every status
+        array and feedback message of its action: made at start, it had ur_sim's process turn each status array of
+        a thousand-goal storm into Python objects (up to 0.7 s each, holding the interpreter lock the simulation
+        loop needs every cycle), for a node that may never run a goal (issue 42)."""
+        if self._trajectory_client is not None:
+            return
+        # One callback at a time: feedback passed on in the order it came (on the MultiThreadedExecutor a reentrant
+        # group runs two feedback callbacks side by side, and they may publish out of order). None of them blocks.
+        clients = MutuallyExclusiveCallbackGroup()
+        self._until_client = ActionClient(self.node, ToolContact, self._until_action, callback_group=clients)
+        self._trajectory_client = ActionClient(self.node, FollowJointTrajectory, self._trajectory_action,
+                                               callback_group=clients)
 
     # ---- goal, cancel (server callbacks) ----------------------------------------------------------------------------
     def _on_goal(self, goal: Until.Goal) -> GoalResponse:
@@ -96,6 +105,7 @@ class TrajectoryUntilNode(Component):
             logger.error(f'Received unknown until-type {goal.until_type}; valid: TOOL_CONTACT (0). Until type not '
                          'defined, double check the types in the action definition.')
             return GoalResponse.REJECT
+        self._make_clients()
         for client, what in ((self._trajectory_client, 'Trajectory'), (self._until_client, 'Until')):
             if not client.wait_for_server(timeout_sec=ACCEPT_TIMEOUT):
                 logger.error(f'{what} action server not available.')
