@@ -4,11 +4,6 @@ the simulated bead as deposited, and whether the robot is there at all.
 The traced frame is the robot description's own tip (:func:`~ur_glue_planner.studio.robot_geometry.tip_frame_of`:
 the dispenser's tip when the dispenser is mounted), so the executed path lies on the bead, not one tool length
 above it at ``tool0``.
-
-The bead is drawn as it grows in pieces of the new deposits only, as the tip path is: ur_sim publishes the whole
-bead so far ten times a second, and sending all of it each time (thousands of points, read from the message on
-every page tick) made the page's work grow with the bead, on a machine where the run and the simulation share the
-same cores.
 """
 from __future__ import annotations
 
@@ -51,10 +46,8 @@ class LiveView:
         self._shown: tuple | None = None  # (names, q) of the pose last sent to the page
         self._trail_drawn = 0
         self._pieces: list = []
-        self._bead_count = 0  # bead messages seen
-        self._bead_pieces: list = []  # point clouds of the deposits drawn, oldest first
-        self._bead_last: np.ndarray | None = None  # the last deposit drawn [m]: a new bead does not start with it
-        self._bead_names = 0  # pieces made so far (each has a name of its own)
+        self._bead_count = 0
+        self._bead_cloud = None
 
     def update(self) -> None:
         """Draw a new robot description, the newest pose and bead; add the tip to the path."""
@@ -90,35 +83,21 @@ class LiveView:
                             None if state is None else state.received, self.live.urdf() is not None)
 
     def _draw_bead(self) -> None:
-        """The simulated bead as it grows: one point per deposit, amber, sized to the deposits' mean width; only the
-        deposits not drawn yet are sent (all again when the bead is a new one: cleared, or not the one drawn)."""
-        count = self.live.beads_received
-        if count == self._bead_count:
+        """The simulated bead as it grows: one point per deposit, amber, sized to the bead's mean width."""
+        count, bead = self.live.bead()
+        if count == self._bead_count or bead is None:
             return
         self._bead_count = count
-        _, bead = self.live.bead()
-        if bead is None:
+        if len(bead.points) == 0:
+            if self._bead_cloud is not None:
+                self._bead_cloud.remove()
+                self._bead_cloud = None
             return
-        drawn = self.bead_points_drawn
-        if len(bead.points) < drawn or (drawn > 0 and not np.array_equal(bead.points[drawn - 1], self._bead_last)):
-            self.clear_bead()  # cleared (a new part) or another bead
-            drawn = 0
-        if len(bead.points) == drawn:
-            return
-        new = bead.points[drawn:]
-        colors = np.tile(np.array([DEPOSIT_COLOR], dtype=np.uint8), (len(new), 1))
-        self._bead_pieces.append(self.server.scene.add_point_cloud(
-            f'/deposited/piece_{self._bead_names}', points=new.astype(np.float32), colors=colors,
-            point_size=float(np.mean(bead.widths[drawn:])), point_shape='circle',
-            precision='float32'))  # viser's float16 would round them by up to 0.5 mm at a metre from the base
-        self._bead_names += 1
-        self._bead_last = np.array(bead.points[-1])
+        colors = np.tile(np.array([DEPOSIT_COLOR], dtype=np.uint8), (len(bead.points), 1))
+        self._bead_cloud = self.server.scene.add_point_cloud(
+            '/deposited', points=bead.points.astype(np.float32), colors=colors,
+            point_size=float(np.mean(bead.widths)), point_shape='circle')
         self.bead_points_drawn = len(bead.points)
-
-    @property
-    def bead_pieces(self) -> list:
-        """The point clouds of the bead on the page, oldest first (a copy)."""
-        return list(self._bead_pieces)
 
     def draw_trail(self) -> None:
         """Send the new part of the tip path as a piece of its own (the page keeps the earlier pieces)."""
@@ -143,10 +122,9 @@ class LiveView:
     def clear_bead(self) -> None:
         """Take the deposited bead off the page (a new plan or part: it was laid for the one before); the next bead
         the robot lays is drawn again."""
-        for piece in self._bead_pieces:
-            piece.remove()
-        self._bead_pieces = []
-        self._bead_last = None
+        if self._bead_cloud is not None:
+            self._bead_cloud.remove()
+            self._bead_cloud = None
         self.bead_points_drawn = 0
 
     @property

@@ -134,11 +134,6 @@ class LiveRobot:
         """(how many bead messages arrived, the newest bead in the planner's world frame or None)."""
         return self.bead_listener.received, self.bead_listener.bead()
 
-    @property
-    def beads_received(self) -> int:
-        """How many bead messages arrived (cheap: :meth:`bead` reads the whole cloud)."""
-        return self.bead_listener.received
-
     # ---- running a plan --------------------------------------------------------------------------------------
     @property
     def running(self) -> bool:
