@@ -13,8 +13,7 @@ one pipe, in order:
   validated trajectory, in the sender's joint order), :class:`Cancel`, :class:`Dropped` (a joint_trajectory
   message refused);
 * simulation -> gateway: :class:`Admission` (the answer to Admit, with the simulated time), :class:`Ended` (a
-  goal's outcome), :class:`Canceled` (the answer to a Cancel), :class:`Feedback`, :class:`ClockOrigin` (the stamps'
-  origin moved).
+  goal's outcome), :class:`Canceled` (the answer to a Cancel), :class:`Feedback`.
 
 One gateway process serves every trajectory controller from one node of its own (``ur_sim_trajectory_gateway``:
 the controllers' nodes are ur_sim's); Admit, Start and Cancel name the controller, the other messages follow the
@@ -61,8 +60,7 @@ class GatewayConfig:
         defaults: the controller's default tolerances (resolved with each goal's in the gateway).
         passthrough: the controllers among `controllers` served with passthrough_trajectory_controller's rules
             (``passthrough.py``; no joint_trajectory topic).
-        clock: the stamps' origin (ur_sim's; the gateway converts the stamps it receives and sends with it, and
-            follows its moves: :class:`ClockOrigin`).
+        clock: the stamps' origin (ur_sim's; the gateway converts the stamps it receives and sends with it).
     """
 
     controllers: tuple[str, ...]
@@ -164,15 +162,6 @@ class Feedback:
     error: tuple[np.ndarray, np.ndarray]
     desired_time: float = 0.0  # [s] desired.time_from_start: trajectory time since the trajectory's start
     actual_time: float = 0.0  # [s] actual.time_from_start: time since the trajectory's start
-
-
-@dataclass(frozen=True)
-class ClockOrigin:
-    """The stamps' origin moved to `origin_ns` [ns] (``conversions.RobotClock``; the simulation loop gave up catching
-    up a stall). Sent by the loop before its next cycle: the feedback of that cycle on comes after it on the pipe. A
-    goal the gateway converts meanwhile (its Admission read before the move) starts as one received just before it."""
-
-    origin_ns: int
 
 
 STOP = 'stop'  # sent last: the gateway ends its goals and exits

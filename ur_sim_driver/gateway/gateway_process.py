@@ -20,20 +20,17 @@ from rclpy.node import Node
 from rclpy.signals import SignalHandlerOptions
 
 from ur_sim_driver.gateway.dds_profile import free_received_samples
-from ur_sim_driver.gateway.gateway_link import STOP, Admission, ClockOrigin, GatewayConfig
+from ur_sim_driver.gateway.gateway_link import STOP, Admission, GatewayConfig
 from ur_sim_driver.gateway.goal_intake import intake_error
 from ur_sim_driver.gateway.memory import use_mmap_for_large_blocks
 from ur_sim_driver.gateway.sim_pipe import SimPipe
 from ur_sim_driver.gateway.trajectory_gateway import TrajectoryGateway
-from ur_sim_driver.motion.conversions import RobotClock
 
 NODE_NAME = 'ur_sim_trajectory_gateway'
 
 
-def _receive(pipe: SimPipe, gateways: dict[str, TrajectoryGateway], clock: RobotClock,
-             stopped: threading.Event) -> None:
-    """Hand the simulation's messages to the controllers until it says stop or the pipe closes; `clock` (the
-    controllers' shared copy of the stamps' clock) follows the simulation's origin (this thread its one writer)."""
+def _receive(pipe: SimPipe, gateways: dict[str, TrajectoryGateway], stopped: threading.Event) -> None:
+    """Hand the simulation's messages to the controllers until it says stop or the pipe closes."""
     try:
         while True:
             message = pipe.conn.recv()
@@ -41,8 +38,6 @@ def _receive(pipe: SimPipe, gateways: dict[str, TrajectoryGateway], clock: Robot
                 break
             if isinstance(message, Admission):
                 pipe.answered(message)
-            elif isinstance(message, ClockOrigin):
-                clock.origin_ns = message.origin_ns
             else:
                 for gateway in gateways.values():
                     if gateway.owns(message.token):
@@ -79,8 +74,7 @@ def run_gateway(conn: Connection) -> None:
         node.get_logger().warning(
             f'goal requests are converted point by point (slow for long trajectories): {intake_error()}')
     stopped = threading.Event()
-    threading.Thread(target=_receive, args=(pipe, gateways, cfg.clock, stopped), name='gateway_receive',
-                     daemon=True).start()
+    threading.Thread(target=_receive, args=(pipe, gateways, stopped), name='gateway_receive', daemon=True).start()
     try:
         while not stopped.is_set() and rclpy.ok():
             executor.spin_once(timeout_sec=0.05)

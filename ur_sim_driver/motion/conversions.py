@@ -34,17 +34,13 @@ def sec_to_duration(t: float) -> Duration:
     return Duration(sec=sec, nanosec=nanosec)
 
 
-@dataclass(eq=False)
+@dataclass(frozen=True)
 class RobotClock:
     """Simulated time [s] and the stamps on the wire: a stamp is `origin_ns` plus the simulated time.
 
     The real driver stamps with the system clock. Running in real time, ur_sim's origin is the wall clock at start,
     so its stamps read as the driver's do (a tf lookup at the client's now finds them); otherwise 0, and clients use
     /clock (use_sim_time). A zero stamp stays zero both ways: on the wire it means "now" / "no end".
-
-    One object per simulation, shared by everything in its process that stamps: the simulation loop is the one
-    writer of `origin_ns`, moving it forward when it gives up catching up a stall (``sim_loop.MAX_BEHIND``), and
-    tells the gateway process (``gateway_link.ClockOrigin``). Not a value: compared by identity.
     """
 
     origin_ns: int = 0

@@ -8,9 +8,8 @@ every cycle. The trajectory controllers' action servers and joint_trajectory sub
 their own (``gateway/gateway_process.py``, started here), so that receiving a large trajectory never holds up the
 loop; a receiving thread hands its trajectories and cancels to their controller under one lock, and the
 controllers send back outcomes and feedback. Every stamp is simulated time on the stamps' clock
-(``conversions.RobotClock``: in real time counted from the system clock, which it rejoins after a stall), which
-the node publishes on /clock. The executable (executors, signals) is ``main.py``; a client in step with the loop,
-``pace_gate.py``.
+(``conversions.RobotClock``: in real time counted from the system clock at start), which the node publishes on
+/clock. The executable (executors, signals) is ``main.py``; a client in step with the loop, ``pace_gate.py``.
 """
 from __future__ import annotations
 
@@ -43,16 +42,7 @@ from ur_sim_driver.controllers.speed_scaling_state_broadcaster import SpeedScali
 from ur_sim_driver.controllers.tcp_pose_broadcaster import TcpPoseBroadcaster
 from ur_sim_driver.controllers.tool_contact import ToolContactController
 from ur_sim_driver.controllers.ur_configuration import UrConfigurationController
-from ur_sim_driver.gateway.gateway_link import (
-    Admission,
-    Admit,
-    ClockOrigin,
-    Dropped,
-    GatewayConfig,
-    GatewayLink,
-    Received,
-    Start,
-)
+from ur_sim_driver.gateway.gateway_link import Admission, Admit, Dropped, GatewayConfig, GatewayLink, Received, Start
 from ur_sim_driver.gateway.memory import use_mmap_for_large_blocks
 from ur_sim_driver.motion import conversions as conv
 from ur_sim_driver.motion.jtc import TrajectoryController
@@ -222,9 +212,8 @@ class UrSimNode(Node):
         self.interpreter_port = self._open_port('interpreter socket', 'interpreter.port', lambda: InterpreterPort(
             cfg.interpreter_host, cfg.interpreter_port, self.host.scripts, self._lock, cfg.software_version)) \
             if has_interpreter_socket(cfg.software_version) else None
-        # The loop owns the stamps' origin (it moves it to rejoin the system clock); the gateway's copy follows.
         self.loop = SimLoop(self.step_once, self.sim, self.cfg, self.clock, self.pace, self._lock, self.context,
-                            self.get_logger(), lambda origin_ns: self.gateway.send(ClockOrigin(origin_ns)))
+                            self.get_logger())
         self._controllers_ready.set()
         if start:
             self.loop.start()

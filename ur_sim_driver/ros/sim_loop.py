@@ -1,15 +1,11 @@
 """The simulation loop's thread: one control cycle after another, paced to the wall clock or as fast as possible.
 
-In real time (``real_time_factor`` > 0) a cycle is due every ``control_dt / real_time_factor`` of wall time. On the
-system clock (the stamps' origin, ``conversions.RobotClock``, is the wall clock at start; moved to the loop's start
-before its first cycle) robot time is owed to the wall clock, as the driver's stamps are its controller manager's
-now(): after a stall the loop simulates the cycles it is behind as fast as it can, so the stamps rejoin the system
-clock with the physics continuous. Beyond ``MAX_BEHIND`` (a long stall, a machine that cannot run faster than real
-time) it gives up the lag instead: the origin moves forward by it, and the stamps jump to the system clock. Counted
-from 0 (in step with a client), a loop more than ``CATCH_UP_LIMIT`` behind starts counting afresh instead of racing.
-In real time the thread runs under SCHED_FIFO where allowed, as ros2_control_node's update thread does. In step with a
-client (``pace_topic``) each cycle first waits at the pace gate. MuJoCo's passive viewer, where asked for and a
-display exists, is synced at ``VIEWER_FRAME_PERIOD``.
+In real time (``real_time_factor`` > 0) a cycle is due every ``control_dt / real_time_factor`` of wall time, counted
+from the stamps' origin (``conversions.RobotClock``): the first cycles catch up the time between taking the origin and
+starting, after that a loop more than ``CATCH_UP_LIMIT`` behind starts counting afresh instead of racing. In real
+time the thread runs under SCHED_FIFO where allowed, as ros2_control_node's update thread does. In step with a client
+(``pace_topic``) each cycle first waits at the pace gate. MuJoCo's passive viewer, where asked for and a display
+exists, is synced at ``VIEWER_FRAME_PERIOD``.
 """
 from __future__ import annotations
 
@@ -26,11 +22,7 @@ from ur_sim_driver.robot.simulator import Simulator
 from ur_sim_driver.ros.pace_gate import PaceGate
 
 VIEWER_FRAME_PERIOD = 1.0 / 30.0  # [s] of wall time
-CATCH_UP_LIMIT = 0.1  # [s] of wall time a loop counted from 0 may fall behind before it stops catching up
-# [s] of wall time a loop on the system clock may fall behind before it moves the origin instead of catching up: a
-# 0.6 s stall is caught up (at some 3 times real time: 0.3 s), a machine slower than real time falls at most this far
-# behind before its stamps jump back to the system clock.
-MAX_BEHIND = 1.0
+CATCH_UP_LIMIT = 0.1  # [s] of wall time the real-time loop may fall behind before it stops catching up
 JOIN_TIMEOUT = 5.0  # [s] of wall time to wait for the loop to finish its cycle at stop
 
 
@@ -41,8 +33,7 @@ class SimLoop:
         step: one control cycle (the node's ``step_once``).
         sim: the simulator (its time and control period; the viewer shows its model).
         cfg: ``real_time_factor``, ``thread_priority`` and ``viewer``.
-        clock: the stamps' clock: a non-zero origin is the wall time the cycles catch up to; the loop moves it.
-        on_origin: called with the new origin [ns] when the loop moved it (before its next cycle).
+        clock: the stamps' clock: a non-zero origin is the wall time the first cycles catch up from.
         pace: the wait for a client in step with the loop, or None.
         lock: held while the viewer reads the simulation.
         context: the node's context (a loop failing after it shut down is shutting down, not failing).
@@ -50,10 +41,8 @@ class SimLoop:
     """
 
     def __init__(self, step: Callable[[], None], sim: Simulator, cfg: SimConfig, clock: RobotClock,
-                 pace: PaceGate | None, lock: threading.Lock, context: Context, logger,
-                 on_origin: Callable[[int], None] = lambda origin_ns: None) -> None:
+                 pace: PaceGate | None, lock: threading.Lock, context: Context, logger) -> None:
         self._step = step
-        self._on_origin = on_origin
         self._sim = sim
         self._cfg = cfg
         self._clock = clock
@@ -98,13 +87,10 @@ class SimLoop:
         dt = self._sim.control_dt
         rtf = self._cfg.real_time_factor
         wall_period = dt / rtf if rtf > 0 else 0.0
-        on_system_clock = wall_period > 0.0 and self._clock.origin_ns != 0
-        # When the next cycle is due (perf_counter [s]). On the system clock robot time 0 was due at the origin,
-        # taken before setting up: the origin moves to now instead.
         next_wall = time.perf_counter()
-        if on_system_clock:
-            owed = (time.time_ns() - self._clock.origin_ns) * 1e-9 - self._sim.time / rtf  # [s] of wall time
-            next_wall = self._give_up_lag(next_wall - owed, rtf, at_start=True)
+        # Stamped from the wall clock at start (the clock's origin): the first cycles catch up the time since.
+        starting = (time.time_ns() - self._clock.origin_ns) * 1e-9 if self._clock.origin_ns else 0.0
+        next_wall -= starting
         if wall_period > 0.0:
             self._real_time_priority()
         try:
@@ -121,11 +107,7 @@ class SimLoop:
                     delay = next_wall - time.perf_counter()
                     if delay > 0.0:
                         time.sleep(delay)
-                    elif on_system_clock:
-                        # Behind: the next cycle at once. (Dropping the lag here, as below, had kept the stamps
-                        # behind the system clock for good after every stall.)
-                        next_wall = self._give_up_lag(next_wall, rtf)
-                    elif delay < -CATCH_UP_LIMIT:
+                    elif delay < -CATCH_UP_LIMIT and self._sim.time > starting:
                         next_wall = time.perf_counter()
                 # As fast as possible the loop never yields on its own: the executor's threads get the GIL within
                 # the switch interval (main.GIL_SWITCH_INTERVAL) when they ask for it. A sleep(0) every 8 cycles cost
@@ -138,27 +120,6 @@ class SimLoop:
         finally:
             if viewer is not None:
                 viewer.close()
-
-    def _give_up_lag(self, due: float, rtf: float, at_start: bool = False) -> float:
-        """When the next cycle is due (perf_counter [s]), given that it was `due`: the same while at most
-        `MAX_BEHIND` behind (the loop catches up), else now, with the stamps' origin moved forward by the robot time
-        not simulated (the wall time behind times `rtf`), so that the stamps rejoin the system clock while the
-        simulated state goes on from where it was. Goals keep their robot time: one under way ends that much later
-        on the stamps. `at_start`: before the first cycle, when nothing is stamped yet, any lag is given up, quietly
-        (racing through the set-up time, 0.5 s or more, gained nothing; stopped short of it, it had left the stamps
-        0.2 s behind for good)."""
-        behind = time.perf_counter() - due
-        if behind <= (0.0 if at_start else MAX_BEHIND):
-            return due
-        skipped = round(behind * rtf * 1e9)  # [ns]
-        self._clock.origin_ns += skipped  # between cycles; this thread is its one writer
-        self._on_origin(self._clock.origin_ns)
-        if not at_start:
-            self._logger.warning(
-                f'the simulation loop was {behind:.2f} s behind the system clock (more than {MAX_BEHIND:.1f} s: a '
-                f'stall, or a machine that cannot keep real time); its stamps skip {skipped * 1e-9:.2f} s to rejoin '
-                'it, the robot goes on from where it was')
-        return due + behind
 
     def _real_time_priority(self) -> None:
         """Run this (the loop's) thread under SCHED_FIFO at `thread_priority`, as ros2_control_node runs its
