@@ -15,7 +15,7 @@ parts: setup
 
 test: setup
 	@$(ENV) ruff check .
-	@$(ENV) python -m pytest test -n 2 --dist loadfile
+	@$(ENV) python -m pytest test -n 3 --dist loadfile --no-loadscope-reorder
 
 lint: setup
 	@$(ENV) ruff check .

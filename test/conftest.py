@@ -59,6 +59,26 @@ def pytest_configure(config) -> None:
     sys.path.insert(0, str(Path(__file__).resolve().parent))
 
 
+# The modules that take longest (seconds of one worker, measured with `-n 3` on the 2-core machine, 2026-12-02;
+# docs/testing.md), slowest first. `make test` hands whole modules to its workers in collection order
+# (`--dist loadfile --no-loadscope-reorder`): started first, the longest ones no longer end the run alone on one
+# worker while the others are idle. Modules not named here follow in their usual order; a stale entry costs only
+# balance, never a result.
+SLOWEST_FIRST = (
+    'test_studio_browser', 'test_glue_bead_e2e', 'test_trajectory_intake', 'test_upstream_scenarios_force',
+    'test_upstream_scenarios_motion', 'test_rtde_control', 'test_examples', 'test_ur_rtde_control',
+    'test_studio_page_browser', 'test_tool_contact', 'test_planner_node', 'test_parts_run',
+    'test_studio_live_browser', 'test_driver_scenarios', 'test_force_mode', 'test_upstream_scenarios_models',
+    'test_executables', 'test_dashboard', 'test_node_params', 'test_upstream_scenarios',
+)
+
+
+def pytest_collection_modifyitems(config, items) -> None:
+    rank = {name: k for k, name in enumerate(SLOWEST_FIRST)}
+    # A stable sort: each module's tests keep their order.
+    items.sort(key=lambda item: rank.get(Path(str(item.fspath)).stem, len(rank)))
+
+
 def pytest_report_header(config) -> str:
     return f"ROS_DOMAIN_ID={os.environ.get('ROS_DOMAIN_ID')} ROS_LOG_DIR={os.environ.get('ROS_LOG_DIR')}"
 

@@ -6,6 +6,7 @@ import time
 from pathlib import Path
 
 import pytest
+from action_msgs.msg import GoalStatus
 from ament_index_python.packages import get_package_prefix, get_resource
 from rclpy.node import Node
 from ros_helpers import executor_with, ros_context, spin_until
@@ -53,6 +54,45 @@ def test_ur_sim_publishes_joint_states_and_exits_cleanly_on_signal(sig):
     assert list(received[-1].name) == ['shoulder_pan_joint', 'shoulder_lift_joint', 'elbow_joint', 'wrist_1_joint',
                                        'wrist_2_joint', 'wrist_3_joint']
     assert len(received[-1].effort) == 6
+
+
+def test_a_goal_running_when_ur_sim_stops_ends_aborted_and_the_process_exits():
+    # The controllers' process answers a goal still running at the stop (its client is not left waiting), then
+    # ends without waiting out a fixed time.
+    from control_msgs.action import FollowJointTrajectory
+    from rclpy.action import ActionClient
+    from trajectory_msgs.msg import JointTrajectoryPoint
+
+    from ur_sim_driver.description.params import joint_names
+    from ur_sim_driver.motion.conversions import sec_to_duration
+
+    proc = _start_ur_sim(stdout=subprocess.PIPE, stderr=subprocess.STDOUT, text=True)
+    try:
+        with ros_context() as ctx:
+            node = Node('exe_goal_probe', context=ctx)
+            client = ActionClient(node, FollowJointTrajectory,
+                                  '/scaled_joint_trajectory_controller/follow_joint_trajectory')
+            with executor_with(ctx, node) as ex:
+                spin_until(ex, client.server_is_ready, 30.0, 'the trajectory action server')
+                goal = FollowJointTrajectory.Goal()
+                goal.trajectory.joint_names = joint_names()
+                # 1000 s of robot time: still running whatever the machine's speed
+                goal.trajectory.points = [JointTrajectoryPoint(positions=[0.1, -1.57, 0.0, -1.57, 0.0, 0.0],
+                                                               time_from_start=sec_to_duration(1000.0))]
+                sent = client.send_goal_async(goal)
+                spin_until(ex, sent.done, 30.0, 'the goal answer')
+                assert sent.result().accepted
+                result = sent.result().get_result_async()
+                os.killpg(proc.pid, signal.SIGINT)
+                spin_until(ex, result.done, 30.0, 'the result of the goal running at the stop')
+        out, _ = proc.communicate(timeout=20)
+    finally:
+        if proc.poll() is None:
+            proc.kill()
+            proc.communicate()
+    assert result.result().status == GoalStatus.STATUS_ABORTED
+    assert result.result().result.error_string == 'ur_sim is shutting down.'
+    assert proc.returncode == 0, out
 
 
 def test_ur_glue_planner_executable_is_installed():

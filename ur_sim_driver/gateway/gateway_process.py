@@ -12,6 +12,7 @@ import faulthandler
 import signal
 import sys
 import threading
+import time
 from multiprocessing.connection import Connection
 
 import rclpy
@@ -27,6 +28,7 @@ from ur_sim_driver.gateway.sim_pipe import SimPipe
 from ur_sim_driver.gateway.trajectory_gateway import TrajectoryGateway
 
 NODE_NAME = 'ur_sim_trajectory_gateway'
+FINISH_TIMEOUT = 2.0  # [s] of wall time for the goals' execute callbacks to end at stop
 
 
 def _receive(pipe: SimPipe, gateways: dict[str, TrajectoryGateway], stopped: threading.Event) -> None:
@@ -78,9 +80,13 @@ def run_gateway(conn: Connection) -> None:
     try:
         while not stopped.is_set() and rclpy.ok():
             executor.spin_once(timeout_sec=0.05)
-        # Let the execute callbacks return their (shutdown) results before the context goes.
-        for _ in range(20):
+        # Let the execute callbacks return their (shutdown) results before the context goes: spun while a goal
+        # executes, then a little for the results' sending (a fixed 0.2 s here was most of every ur_sim's stop).
+        deadline = time.monotonic() + FINISH_TIMEOUT
+        while any(gateway.busy() for gateway in gateways.values()) and time.monotonic() < deadline:
             executor.spin_once(timeout_sec=0.01)
+        for _ in range(3):
+            executor.spin_once(timeout_sec=0.005)
     except (KeyboardInterrupt, ExternalShutdownException):
         pass
     finally:

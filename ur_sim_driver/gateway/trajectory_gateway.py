@@ -139,7 +139,7 @@ class TrajectoryGateway:
             reason = NOT_ANSWERING
         elif admission.reason is not None:
             reason = admission.reason
-        elif self.passthrough and self._busy():
+        elif self.passthrough and self.busy():
             reason = passthrough.BUSY
         else:
             reason = self._validate(cmd, 'FollowJointTrajectory goal', admission.now)
@@ -153,7 +153,8 @@ class TrajectoryGateway:
         self._pending[id(goal)] = self._on_sim_time(cmd)
         return GoalResponse.ACCEPT
 
-    def _busy(self) -> bool:
+    def busy(self) -> bool:
+        """A goal is being converted, accepted or executed (its execute callback has not ended)."""
         with self._lock:
             return bool(self._waiters) or bool(self._pending)
 
