@@ -193,6 +193,7 @@ class GatewayLink:
         self.ended: collections.deque = collections.deque(maxlen=ENDED_KEPT)
         self._receiver = threading.Thread(target=self._receive, name='gateway_receive', daemon=True)
         self._sender = threading.Thread(target=self._send, name='gateway_send', daemon=True)
+        self._child_closed = threading.Event()  # the process's end of the pipe is closed (recv() saw EOF)
         self._receiver.start()
         self._sender.start()
 
@@ -213,22 +214,29 @@ class GatewayLink:
                 return
 
     def _receive(self) -> None:
-        while not self._closed.is_set():
-            try:
+        try:
+            while True:
                 message = self._conn.recv()
-            except (OSError, EOFError):
-                return
-            self._on_message(message)
+                if not self._closed.is_set():  # after close, only drained until the process lets go of the pipe
+                    self._on_message(message)
+        except (OSError, EOFError):
+            pass
+        finally:
+            self._child_closed.set()
 
     def close(self, timeout: float = 5.0) -> None:
-        """Stop the gateway process (it ends its goals as aborted) and the threads."""
+        """Stop the gateway process (it ends its goals as aborted) and the threads.
+
+        Returns once the process has closed its end of the pipe, which it does last, after its goals' results went
+        out and its node and ROS context are gone; its interpreter's exit after that (about 0.16 s of finalisation)
+        is waited for by a thread of its own (every ur_sim stop of the suite waited for it)."""
         self._closed.set()
         self._outbox.put(STOP)
         self._sender.join(timeout=timeout)
-        try:
-            self.process.wait(timeout=timeout)
-        except subprocess.TimeoutExpired:
+        if self._child_closed.wait(timeout=timeout):
+            threading.Thread(target=self.process.wait, name='gateway_reap', daemon=True).start()
+        else:
             self.process.terminate()
             self.process.wait(timeout=timeout)
-        self._receiver.join(timeout=timeout)  # the child's end is closed now: recv() has seen EOF
+        self._receiver.join(timeout=timeout)
         self._conn.close()

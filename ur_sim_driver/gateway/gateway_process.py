@@ -29,10 +29,13 @@ from ur_sim_driver.gateway.trajectory_gateway import TrajectoryGateway
 
 NODE_NAME = 'ur_sim_trajectory_gateway'
 FINISH_TIMEOUT = 2.0  # [s] of wall time for the goals' execute callbacks to end at stop
+RESULT_SPIN = 0.2  # [s] of wall time spun after them, for their results to go out
 
 
-def _receive(pipe: SimPipe, gateways: dict[str, TrajectoryGateway], stopped: threading.Event) -> None:
-    """Hand the simulation's messages to the controllers until it says stop or the pipe closes."""
+def _receive(pipe: SimPipe, gateways: dict[str, TrajectoryGateway], stopped: threading.Event,
+             ended_goals: threading.Event) -> None:
+    """Hand the simulation's messages to the controllers until it says stop or the pipe closes; then end their
+    goals (`ended_goals` set if there were any) and set `stopped`."""
     try:
         while True:
             message = pipe.conn.recv()
@@ -48,8 +51,8 @@ def _receive(pipe: SimPipe, gateways: dict[str, TrajectoryGateway], stopped: thr
     except (OSError, EOFError):
         pass
     pipe.end_all()
-    for gateway in gateways.values():
-        gateway.end_all()
+    if sum(gateway.end_all() for gateway in gateways.values()) > 0:
+        ended_goals.set()
     stopped.set()
 
 
@@ -75,18 +78,23 @@ def run_gateway(conn: Connection) -> None:
     if intake_error() is not None:
         node.get_logger().warning(
             f'goal requests are converted point by point (slow for long trajectories): {intake_error()}')
-    stopped = threading.Event()
-    threading.Thread(target=_receive, args=(pipe, gateways, stopped), name='gateway_receive', daemon=True).start()
+    stopped, ended_goals = threading.Event(), threading.Event()
+    threading.Thread(target=_receive, args=(pipe, gateways, stopped, ended_goals), name='gateway_receive',
+                     daemon=True).start()
     try:
         while not stopped.is_set() and rclpy.ok():
             executor.spin_once(timeout_sec=0.05)
         # Let the execute callbacks return their (shutdown) results before the context goes: spun while a goal
-        # executes, then a little for the results' sending (a fixed 0.2 s here was most of every ur_sim's stop).
-        deadline = time.monotonic() + FINISH_TIMEOUT
-        while any(gateway.busy() for gateway in gateways.values()) and time.monotonic() < deadline:
-            executor.spin_once(timeout_sec=0.01)
-        for _ in range(3):
-            executor.spin_once(timeout_sec=0.005)
+        # executes, then RESULT_SPIN more for the results' sending (rclpy sends a result from a task of its own,
+        # which the executor runs at a later spin). With no goal at the stop there is nothing to send: the fixed
+        # spin had been most of every ur_sim's stop.
+        if ended_goals.is_set() or any(gateway.busy() for gateway in gateways.values()):
+            deadline = time.monotonic() + FINISH_TIMEOUT
+            while any(gateway.busy() for gateway in gateways.values()) and time.monotonic() < deadline:
+                executor.spin_once(timeout_sec=0.01)
+            until = time.monotonic() + RESULT_SPIN
+            while time.monotonic() < until:
+                executor.spin_once(timeout_sec=0.01)
     except (KeyboardInterrupt, ExternalShutdownException):
         pass
     finally:

@@ -258,8 +258,8 @@ class TrajectoryGateway:
         with self._lock:
             return token in self._waiters
 
-    def end_all(self) -> None:
-        """The simulation is gone: every goal ends."""
+    def end_all(self) -> int:
+        """The simulation is gone: every goal ends. Returns how many goals were still executing."""
         with self._lock:
             waiters = list(self._waiters.values())
             received = list(self._received.values())
@@ -269,6 +269,7 @@ class TrajectoryGateway:
             if not waiter.event.is_set():
                 waiter.ended = _SHUTDOWN
                 waiter.event.set()
+        return len(waiters)
 
     def dispatch(self, message: object) -> None:
         """A Received, Ended, Canceled or Feedback for one of this controller's goals."""
