@@ -19,6 +19,7 @@ ends (``JointCommander.halt``), and the servo brakes at the robot's limits.
 from __future__ import annotations
 
 import threading
+import time
 
 from rclpy.action import ActionServer, CancelResponse, GoalResponse
 from rclpy.callback_groups import ReentrantCallbackGroup
@@ -38,6 +39,9 @@ BUSY = 'Tool contact already active, rejecting goal.'
 DEACTIVATED = 'Aborting tool contact, as controller has been deactivated.'
 CB3 = 'This feature is not supported on CB3 robots, controller will not be started.'
 SUCCEEDED, ABORTED, CANCELED = 'succeeded', 'aborted', 'canceled'
+
+
+CANCEL_TAKEN = 1.0  # [s] of wall time for rclpy to take a cancel this controller has already carried out
 
 
 class _Goal:
@@ -139,6 +143,16 @@ class ToolContactController(Component):
                 self._end(CANCELED)
         return CancelResponse.ACCEPT
 
+    def _cancel_taken(self, goal_handle) -> bool:
+        """Whether rclpy has moved the goal to CANCELING (waited for up to CANCEL_TAKEN [s] of wall time). The
+        cancel callback ends the goal at once, so that no contact ends it meanwhile, but rclpy takes the cancel only
+        after the callback has returned ACCEPT: this execution, woken by the callback, could call canceled() first,
+        an invalid transition that aborted the goal (seen once in a suite run)."""
+        deadline = time.monotonic() + CANCEL_TAKEN
+        while not goal_handle.is_cancel_requested and time.monotonic() < deadline and self.host.context.ok():
+            time.sleep(0.001)  # a poll: rclpy offers no event for the goal's state
+        return goal_handle.is_cancel_requested
+
     def _execute(self, goal_handle) -> ToolContact.Result:
         with self.host.lock:
             goal, self._unclaimed = self._unclaimed, None
@@ -156,7 +170,7 @@ class ToolContactController(Component):
         if goal.outcome == SUCCEEDED:
             self.node.get_logger().info('Tool contact finished successfully.')
             goal_handle.succeed()
-        elif goal.outcome == CANCELED:
+        elif goal.outcome == CANCELED and self._cancel_taken(goal_handle):
             goal_handle.canceled()
         else:
             goal_handle.abort()
